@@ -1,0 +1,119 @@
+"""One typed source of truth for the link's physical constants.
+
+The paper (Li et al., "Data-Driven State Estimation for LED Underwater Optical
+Communication") gives the model's form but not most of its constants; the values
+chosen here and the reasoning behind each are written out in ``docs/model.md``.
+Everything that computes a power, a transition or a noise sample reads them from a
+:class:`LinkConstants` instance, and checkpoints record them so a mismatch is caught.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import asdict, dataclass, field, replace
+
+
+class ConfigError(ValueError):
+    """A user-supplied constant is out of its allowed range."""
+
+
+@dataclass(frozen=True)
+class ReceiverResponse:
+    """Two-Gaussian angular response g(phi) of a photodiode, paper eq. (modified-gaussian2).
+
+    ``g(phi) = a1 exp(-((phi-b1)/c1)^2) + a2 exp(-((phi+b2)/c2)^2)``, dimensionless,
+    phi in rad. Main lobe slightly off-axis (lens/mount misalignment b1) plus a side
+    shoulder at -b2: non-monotonic on the training domain, as in N'Doye et al. (2020).
+    """
+
+    a1: float = 1.0  # main-lobe gain [-]
+    b1: float = 0.05  # main-lobe offset [rad]
+    c1: float = 0.30  # main-lobe width [rad] (FWHM = 2 sqrt(ln 2) c1 = 0.50 rad = 29 deg)
+    a2: float = 0.30  # shoulder gain [-]
+    b2: float = 0.25  # shoulder offset, towards negative phi [rad]
+    c2: float = 0.20  # shoulder width [rad]
+
+
+@dataclass(frozen=True)
+class LinkConstants:
+    """Constants of the LED link and of the receiver dynamics (SI units).
+
+    Attributes:
+        Te: control / sampling period [s].
+        dphi: angular offset between the two photodiode normals, Delta phi [rad].
+        distance: link distance d between LED and receiver [m] (paper's d0 = 0.085 m).
+        power_scale: a in eq. (pow-d-theta-phi): LED radiant intensity x detector
+            area x responsivity [W m^2]; gives about 1 W at 8.5 cm on axis.
+        attenuation: b (= c in eq. eq-3a), beam attenuation of the water [1/m]
+            (clear ocean, Mobley 1994).
+        led_half_angle: LED half-power semi-angle [rad]; sets the Lambertian order of
+            I(theta) = cos(theta)^m.
+        theta: emission angle of the line of sight w.r.t. the LED axis [rad] (paper: fixed).
+        measurement_noise_var: variance of the additive power noise [W^2] (paper: 0.001).
+        process_noise_std: per-step standard deviation of (w1 [rad], w2 [rad/s]).
+        receiver: the photodiode response g(phi).
+    """
+
+    Te: float = 0.01
+    dphi: float = math.radians(6.0)
+    distance: float = 0.085
+    power_scale: float = 7.3e-3
+    attenuation: float = 0.15
+    led_half_angle: float = math.radians(20.0)
+    theta: float = 0.0
+    measurement_noise_var: float = 1e-3
+    process_noise_std: tuple[float, float] = (1e-4, 2e-4)
+    receiver: ReceiverResponse = field(default_factory=ReceiverResponse)
+
+    def __post_init__(self) -> None:
+        self.validate()
+
+    def validate(self) -> None:
+        """Raise :class:`ConfigError` naming the first out-of-range constant."""
+        checks = [
+            ("Te", self.Te, self.Te > 0, "> 0 s"),
+            ("distance", self.distance, self.distance > 0, "> 0 m"),
+            ("dphi", self.dphi, self.dphi != 0 and abs(self.dphi) < math.pi / 2,
+             "non-zero and |dphi| < pi/2 rad"),
+            ("power_scale", self.power_scale, self.power_scale > 0, "> 0 W m^2"),
+            ("attenuation", self.attenuation, self.attenuation >= 0, ">= 0 1/m"),
+            ("led_half_angle", self.led_half_angle, 0 < self.led_half_angle < math.pi / 2,
+             "in (0, pi/2) rad"),
+            ("measurement_noise_var", self.measurement_noise_var,
+             self.measurement_noise_var >= 0, ">= 0 W^2"),
+            ("receiver.c1", self.receiver.c1, self.receiver.c1 > 0, "> 0 rad"),
+            ("receiver.c2", self.receiver.c2, self.receiver.c2 > 0, "> 0 rad"),
+        ]
+        for name, value, ok, allowed in checks:
+            if not (ok and math.isfinite(value)):
+                raise ConfigError(f"{name}={value!r} is not allowed: must be {allowed}")
+        if len(self.process_noise_std) != 2 or min(self.process_noise_std) < 0:
+            raise ConfigError(
+                f"process_noise_std={self.process_noise_std!r} is not allowed: "
+                "must be two values >= 0")
+
+    @property
+    def lambertian_order(self) -> float:
+        """m such that cos(led_half_angle)^m = 1/2."""
+        return -math.log(2.0) / math.log(math.cos(self.led_half_angle))
+
+    @property
+    def measurement_noise_std(self) -> float:
+        """Standard deviation of the power noise [W]."""
+        return math.sqrt(self.measurement_noise_var)
+
+    def with_(self, **changes) -> LinkConstants:
+        """A validated copy with some constants changed."""
+        return replace(self, **changes)
+
+    def to_dict(self) -> dict:
+        d = asdict(self)
+        d["process_noise_std"] = list(self.process_noise_std)
+        return d
+
+    @classmethod
+    def from_dict(cls, d: dict) -> LinkConstants:
+        d = dict(d)
+        d["receiver"] = ReceiverResponse(**d.get("receiver", {}))
+        d["process_noise_std"] = tuple(d.get("process_noise_std", (1e-4, 2e-4)))
+        return cls(**d)

@@ -1,0 +1,25 @@
+"""Named observer configurations: the paper's literal one and the shipped default.
+
+Measured against each other by ``scripts/ablation.py`` (numbers in ``docs/observer.md``).
+"""
+
+from __future__ import annotations
+
+from observer.kkl import KKLDesign
+from observer.training import TrainingConfig
+
+#: Filter rates r of the default design: eigenvalues 1 - Te r per photodiode. The
+#: paper's slowest rate (r = 1, eigenvalue 0.99) makes T too hard to learn precisely.
+DEFAULT_RATES = (2.0, 4.0, 6.0, 8.0, 10.0)
+
+
+def observer_preset(name: str, Te: float) -> tuple[KKLDesign, TrainingConfig]:
+    """``"paper"``: A, B and training as written in the paper (Adam on L_dyn, then on
+    L_recon, noise-free z). ``"default"``: y1 and y2 filtered separately, exact
+    least-squares output layers, and a decoder trained on the z noise it will see."""
+    if name == "paper":
+        return KKLDesign.paper(Te), TrainingConfig(
+            output_solve=False, encoder_epochs=30, decoder_epochs=30, decoder_noise="none")
+    if name == "default":
+        return KKLDesign.split(Te, DEFAULT_RATES, name="default"), TrainingConfig()
+    raise ValueError(f"unknown observer preset {name!r}: use 'default' or 'paper'")

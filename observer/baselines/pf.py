@@ -1,0 +1,71 @@
+"""Bootstrap particle filter: with enough particles, a stand-in for the Bayesian optimum."""
+
+from __future__ import annotations
+
+import numpy as np
+
+from ..estimator import Estimator, finite_mask
+from ..system import DiscreteSystem
+
+
+class ParticleFilter(Estimator):
+    """Sequential importance resampling with systematic resampling and regularisation.
+
+    Args:
+        system: plant; its noise levels give the process noise and the likelihood.
+        n_particles: number of particles.
+        P0: covariance of the Gaussian initial cloud (default: uniform law on the domain).
+        seed: seed of the filter's own random numbers.
+        jitter: after a resampling, add Gaussian noise of ``jitter`` x the Silverman
+            bandwidth times the cloud's spread, against sample impoverishment.
+    """
+
+    name = "pf"
+
+    def __init__(self, system: DiscreteSystem, n_particles: int = 5000,
+                 P0: np.ndarray | None = None, seed: int = 0, jitter: float = 0.5):
+        super().__init__(system)
+        if n_particles < 1:
+            raise ValueError(f"n_particles={n_particles}: must be >= 1")
+        self.n_particles = n_particles
+        self.P0 = self.initial_covariance() if P0 is None else np.asarray(P0, dtype=float)
+        self.seed = seed
+        self.jitter = jitter
+        self.inv_R = 1.0 / system.measurement_noise_std**2
+        d = system.n_state
+        self.bandwidth = jitter * (4.0 / (n_particles * (d + 2))) ** (1.0 / (d + 4))
+        self.reset()
+
+    def reset(self, x0=None) -> None:
+        self.rng = np.random.default_rng(self.seed)
+        L = np.linalg.cholesky(self.P0)
+        self.particles = self.initial_guess(x0) + self.rng.standard_normal(
+            (self.n_particles, self.system.n_state)) @ L.T
+        self.logw = np.zeros(self.n_particles)
+
+    def update(self, y) -> np.ndarray:
+        y = np.asarray(y, dtype=float)
+        ok = finite_mask(y)
+        if ok.any():
+            r = self.system.h(self.particles)[:, ok] - y[ok]
+            self.logw = self.logw - 0.5 * (r**2 @ self.inv_R[ok])
+        self.logw -= self.logw.max()
+        w = np.exp(self.logw)
+        w /= w.sum()
+        estimate = w @ self.particles
+        if 1.0 / np.sum(w**2) < 0.5 * self.n_particles:
+            self._resample(w)
+        return estimate
+
+    def _resample(self, w) -> None:
+        n = self.n_particles
+        positions = (self.rng.random() + np.arange(n)) / n
+        idx = np.minimum(np.searchsorted(np.cumsum(w), positions), n - 1)
+        spread = self.particles.std(axis=0)
+        self.particles = self.particles[idx] + self.bandwidth * spread * \
+            self.rng.standard_normal(self.particles.shape)
+        self.logw = np.zeros(n)
+
+    def predict(self, u) -> None:
+        noise = self.rng.standard_normal(self.particles.shape) * self.system.process_noise_std
+        self.particles = self.system.f(self.particles, u) + noise

@@ -1,0 +1,66 @@
+"""Unscented Kalman filter with Van der Merwe's scaled sigma points."""
+
+from __future__ import annotations
+
+import numpy as np
+
+from ..estimator import Estimator, finite_mask
+from ..system import DiscreteSystem
+
+
+class UnscentedKalmanFilter(Estimator):
+    """UKF (Wan & Van der Merwe 2000) on the system's f and h.
+
+    Args:
+        system: plant; its noise levels give Q and R.
+        alpha, beta, kappa: sigma-point spread parameters.
+        P0: initial covariance (default: uniform law on the domain).
+    """
+
+    name = "ukf"
+
+    def __init__(self, system: DiscreteSystem, alpha: float = 0.5, beta: float = 2.0,
+                 kappa: float = 1.0, P0: np.ndarray | None = None):
+        super().__init__(system)
+        n = system.n_state
+        self.lam = alpha**2 * (n + kappa) - n
+        self.Wm = np.full(2 * n + 1, 0.5 / (n + self.lam))
+        self.Wc = self.Wm.copy()
+        self.Wm[0] = self.lam / (n + self.lam)
+        self.Wc[0] = self.Wm[0] + 1 - alpha**2 + beta
+        self.Q = np.diag(system.process_noise_std**2)
+        self.R = np.diag(system.measurement_noise_std**2)
+        self.P0 = self.initial_covariance() if P0 is None else np.asarray(P0, dtype=float)
+        self.reset()
+
+    def reset(self, x0=None) -> None:
+        self.x = self.initial_guess(x0)
+        self.P = self.P0.copy()
+
+    def sigma_points(self) -> np.ndarray:
+        n = self.x.size
+        L = np.linalg.cholesky((n + self.lam) * self.P)
+        return np.vstack([self.x, self.x + L.T, self.x - L.T])
+
+    def update(self, y) -> np.ndarray:
+        y = np.asarray(y, dtype=float)
+        ok = finite_mask(y)
+        if ok.any():
+            X = self.sigma_points()
+            Y = self.system.h(X)[:, ok]
+            y_mean = self.Wm @ Y
+            dY = Y - y_mean
+            dX = X - self.x
+            S = (self.Wc * dY.T) @ dY + self.R[np.ix_(ok, ok)]
+            C = (self.Wc * dX.T) @ dY
+            K = np.linalg.solve(S, C.T).T
+            self.x = self.x + K @ (y[ok] - y_mean)
+            self.P = self.P - K @ S @ K.T
+            self.P = 0.5 * (self.P + self.P.T)
+        return self.x.copy()
+
+    def predict(self, u) -> None:
+        X = self.system.f(self.sigma_points(), u)
+        self.x = self.Wm @ X
+        dX = X - self.x
+        self.P = (self.Wc * dX.T) @ dX + self.Q

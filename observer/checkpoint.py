@@ -1,0 +1,130 @@
+"""Saving and loading trained KKL observers: weights plus JSON metadata.
+
+A checkpoint is one ``.pt`` file holding only tensors and a JSON string (so it loads
+with ``torch.load(..., weights_only=True)``; nothing is unpickled) and a readable
+``.json`` copy of the metadata beside it. Both are written atomically. Loading checks
+the metadata (Te, A, B, model constants) against the system it is loaded for.
+"""
+
+from __future__ import annotations
+
+import json
+import math
+import os
+import tempfile
+from pathlib import Path
+
+import numpy as np
+import torch
+
+from .kkl import KKLObserver
+from .nets import NumpyMLP
+from .system import DiscreteSystem
+
+FORMAT = "ledsim-kkl/1"
+
+
+class CheckpointError(ValueError):
+    """A checkpoint is missing, corrupt, or was trained for another system."""
+
+
+def atomic_write_bytes(path: Path, write) -> None:
+    """Call ``write(tmp_path)`` then rename over ``path``: never a half-written file."""
+    path = Path(path)
+    path.parent.mkdir(parents=True, exist_ok=True)
+    fd, tmp = tempfile.mkstemp(dir=path.parent, prefix=f".{path.name}.", suffix=".tmp")
+    os.close(fd)
+    umask = os.umask(0)
+    os.umask(umask)
+    try:
+        write(tmp)
+        os.chmod(tmp, 0o666 & ~umask)  # mkstemp makes 0600; give the usual file mode
+        os.replace(tmp, path)
+    except BaseException:
+        if os.path.exists(tmp):
+            os.unlink(tmp)
+        raise
+
+
+def atomic_write_text(path: Path, text: str) -> None:
+    atomic_write_bytes(path, lambda tmp: Path(tmp).write_text(text))
+
+
+def save(obs: KKLObserver, path: str | Path, extra: dict | None = None) -> Path:
+    """Write ``obs`` to ``path`` (``.pt``) and its metadata to ``path.with_suffix('.json')``."""
+    path = Path(path)
+    meta = {
+        "format": FORMAT,
+        "system": obs.system.metadata(),
+        "eigenvalues": obs.eigenvalues.tolist(),
+        "B_scaled": obs.B.tolist(),
+        "u_bar": obs.u_bar,
+        **getattr(obs, "training_metadata", {}),
+        **(extra or {}),
+    }
+    tensors = {**obs.encoder_T.to_tensors("encoder_T"),
+               **obs.decoder_T_star.to_tensors("decoder_T_star")}
+    payload = {"format": FORMAT, "metadata_json": json.dumps(meta), **tensors}
+    atomic_write_bytes(path, lambda tmp: torch.save(payload, tmp))
+    atomic_write_text(path.with_suffix(".json"), json.dumps(meta, indent=2) + "\n")
+    return path
+
+
+def load(path: str | Path, system: DiscreteSystem, check: bool = True) -> KKLObserver:
+    """Load a checkpoint for ``system``; raise :class:`CheckpointError` if it does not fit."""
+    path = Path(path)
+    if not path.is_file():
+        raise CheckpointError(f"checkpoint {str(path)!r} does not exist")
+    try:
+        payload = torch.load(path, map_location="cpu", weights_only=True)
+        meta = json.loads(payload["metadata_json"])
+        enc = NumpyMLP.from_tensors(payload, "encoder_T")
+        dec = NumpyMLP.from_tensors(payload, "decoder_T_star")
+    except Exception as exc:  # corrupt file, wrong keys, not a torch file
+        raise CheckpointError(f"checkpoint {str(path)!r} is corrupt or not a ledsim "
+                              f"checkpoint ({type(exc).__name__})") from None
+    if payload.get("format") != FORMAT:
+        raise CheckpointError(f"checkpoint {str(path)!r} has format "
+                              f"{payload.get('format')!r}, expected {FORMAT!r}")
+    lam = np.asarray(meta["eigenvalues"], dtype=float)
+    B = np.asarray(meta["B_scaled"], dtype=float)
+    shapes_ok = (enc.n_in == system.n_state and dec.n_out == system.n_state
+                 and enc.n_out == lam.size == dec.n_in and B.shape == (lam.size, system.n_output))
+    if not shapes_ok:
+        raise CheckpointError(f"checkpoint {str(path)!r} has network shapes that do not fit "
+                              f"a system with n={system.n_state}, p={system.n_output}")
+    if check:
+        mismatch = first_mismatch(meta["system"], system.metadata())
+        if mismatch:
+            key, saved, current = mismatch
+            raise CheckpointError(f"checkpoint {str(path)!r} was trained with {key}={saved!r} "
+                                  f"but the run uses {key}={current!r}")
+    obs = KKLObserver(system, lam, B, enc, dec, u_bar=meta.get("u_bar", 0.0))
+    obs.training_metadata = {k: meta[k] for k in ("design", "training", "report") if k in meta}
+    return obs
+
+
+def first_mismatch(saved, current, prefix: str = "") -> tuple[str, object, object] | None:
+    """The first key (dotted path) whose value differs between two metadata trees."""
+    if isinstance(saved, dict) and isinstance(current, dict):
+        for key in sorted(set(saved) | set(current)):
+            found = first_mismatch(saved.get(key), current.get(key),
+                                   f"{prefix}.{key}" if prefix else key)
+            if found:
+                return found
+        return None
+    if isinstance(saved, list | tuple) and isinstance(current, list | tuple):
+        if len(saved) != len(current):
+            return prefix, saved, current
+        for i, (a, b) in enumerate(zip(saved, current, strict=True)):
+            found = first_mismatch(a, b, f"{prefix}[{i}]")
+            if found:
+                return found
+        return None
+    if isinstance(saved, float | int) and isinstance(current, float | int):
+        if not math.isclose(saved, current, rel_tol=1e-9, abs_tol=1e-12):
+            return prefix, saved, current
+        return None
+    if saved != current:
+        return prefix, saved, current
+    return None

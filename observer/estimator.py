@@ -1,0 +1,53 @@
+"""Common shape of every estimator (KKL, EKF, UKF, particle filter), filterpy style.
+
+At step k the loop calls ``update(y_k)`` (returns the estimate of x_k), the controller
+picks ``u_k`` from it, then ``predict(u_k)`` moves the estimator to k+1.
+
+Missing measurements: a component of ``y`` that is NaN or inf never enters the state
+of an estimator. The Kalman-type filters and the particle filter skip that component in
+the update; the KKL observer replaces it by its own prediction h(x_hat) ("hold the
+prediction"), so z keeps moving along the model (see ``docs/observer.md``).
+"""
+
+from __future__ import annotations
+
+from abc import ABC, abstractmethod
+
+import numpy as np
+
+from .system import DiscreteSystem
+
+
+class Estimator(ABC):
+    """A recursive state estimator for a :class:`DiscreteSystem`."""
+
+    name: str = "estimator"
+
+    def __init__(self, system: DiscreteSystem):
+        self.system = system
+
+    @abstractmethod
+    def reset(self, x0: np.ndarray | None = None) -> None:
+        """Start again from the initial guess ``x0`` (default: the domain centre)."""
+
+    @abstractmethod
+    def update(self, y: np.ndarray) -> np.ndarray:
+        """Take the measurement y_k; return the estimate of x_k, shape ``(n_state,)``."""
+
+    @abstractmethod
+    def predict(self, u) -> None:
+        """Propagate to step k+1 under input u_k."""
+
+    def initial_guess(self, x0) -> np.ndarray:
+        if x0 is None:
+            return self.system.domain_center.astype(float).copy()
+        return np.asarray(x0, dtype=float).copy()
+
+    def initial_covariance(self) -> np.ndarray:
+        """Covariance of a uniform distribution over the training box."""
+        return np.diag(self.system.domain_halfwidth**2 / 3.0)
+
+
+def finite_mask(y: np.ndarray) -> np.ndarray:
+    """Which components of ``y`` are usable measurements."""
+    return np.isfinite(np.asarray(y, dtype=float))

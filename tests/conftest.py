@@ -1,0 +1,32 @@
+import os
+
+os.environ.setdefault("MUJOCO_GL", "osmesa")
+
+import numpy as np  # noqa: E402
+import pytest  # noqa: E402
+
+from ledsim.config import LinkConstants  # noqa: E402
+from ledsim.paper_model import LEDLinkModel  # noqa: E402
+
+
+@pytest.fixture(scope="session")
+def system():
+    return LEDLinkModel(LinkConstants())
+
+
+@pytest.fixture(scope="session")
+def tiny_observer(system):
+    """A small KKL observer trained in a few seconds (default recipe, fewer samples)."""
+    from ledsim.presets import observer_preset
+    from observer.training import train_kkl
+
+    design, cfg = observer_preset("default", system.Te)
+    cfg.n_samples = 30_000
+    cfg.hidden = 300
+    obs, _ = train_kkl(system, design, cfg, progress=False)
+    return obs
+
+
+@pytest.fixture
+def rng():
+    return np.random.default_rng(0)

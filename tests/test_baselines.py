@@ -1,0 +1,35 @@
+import numpy as np
+import pytest
+
+from ledsim.scenarios import Noise, get_scenario, run
+from observer.baselines import ExtendedKalmanFilter, ParticleFilter, UnscentedKalmanFilter
+from observer.metrics import converged, rmse
+
+
+@pytest.mark.parametrize("make", [ExtendedKalmanFilter, UnscentedKalmanFilter,
+                                  lambda s: ParticleFilter(s, 1000)])
+def test_filter_tracks_open_loop_from_centre(system, make):
+    sc = get_scenario("open-loop")
+    out = run(system, sc, make(system), Noise.draw(system, sc.n_steps, 0))
+    assert np.all(rmse(out["xhat"], out["x"], sc.steady_from) < [6e-3, 1e-2])
+
+
+@pytest.mark.parametrize("make", [ExtendedKalmanFilter, UnscentedKalmanFilter,
+                                  lambda s: ParticleFilter(s, 500)])
+def test_filters_skip_missing_measurements(system, make):
+    est = make(system)
+    est.reset()
+    x_before = est.update(np.array([np.nan, np.nan]))
+    np.testing.assert_allclose(x_before, system.domain_center, atol=0.05)
+    est.predict(0.0)
+    x = est.update(np.array([np.nan, 0.9]))
+    assert np.all(np.isfinite(x))
+
+
+def test_convergence_flag_separates_locked_from_tracking_estimates():
+    t = np.linspace(0, 1, 100)
+    truth = np.stack([0.1 * t, 0 * t], -1)
+    good = truth + 0.001
+    wrong_branch = truth * [-1, 1] + [0.05, 0]  # mirror image across the peak
+    assert converged(good, truth, 50)
+    assert not converged(wrong_branch, truth, 50)

@@ -1,0 +1,54 @@
+import numpy as np
+import pytest
+
+from ledsim.config import LinkConstants
+from ledsim.evaluate import default_checkpoint
+from ledsim.paper_model import LEDLinkModel
+from ledsim.scenarios import Noise, get_scenario, run
+from observer import checkpoint
+from observer.metrics import rmse
+
+
+def test_round_trip_gives_the_same_observer(tiny_observer, system, tmp_path, rng):
+    path = checkpoint.save(tiny_observer, tmp_path / "obs.pt")
+    assert path.with_suffix(".json").is_file()
+    loaded = checkpoint.load(path, system)
+    x = system.sample_domain(rng, 10)
+    np.testing.assert_allclose(loaded.encode(x), tiny_observer.encode(x))
+    np.testing.assert_allclose(loaded.decode(loaded.encode(x)),
+                               tiny_observer.decode(tiny_observer.encode(x)))
+    assert not list(tmp_path.glob("*.tmp"))
+
+
+def test_checkpoint_for_another_distance_is_refused(tiny_observer, tmp_path):
+    path = checkpoint.save(tiny_observer, tmp_path / "obs.pt")
+    with pytest.raises(checkpoint.CheckpointError, match=r"constants\.distance"):
+        checkpoint.load(path, LEDLinkModel(LinkConstants(distance=0.2)))
+
+
+def test_checkpoint_with_other_Te_is_refused(tiny_observer, tmp_path):
+    path = checkpoint.save(tiny_observer, tmp_path / "obs.pt")
+    with pytest.raises(checkpoint.CheckpointError, match="Te"):
+        checkpoint.load(path, LEDLinkModel(LinkConstants(Te=0.02)))
+
+
+def test_corrupt_and_missing_checkpoints_are_refused(tmp_path, system):
+    bad = tmp_path / "bad.pt"
+    bad.write_bytes(b"not a checkpoint")
+    with pytest.raises(checkpoint.CheckpointError, match="corrupt"):
+        checkpoint.load(bad, system)
+    with pytest.raises(checkpoint.CheckpointError, match="does not exist"):
+        checkpoint.load(tmp_path / "missing.pt", system)
+
+
+@pytest.mark.parametrize("d,bound", [(0.085, (5.2e-3, 19.2e-3)), (0.1, (5.2e-3, 19.2e-3)),
+                                     (0.2, (3e-2, 3e-2))])
+def test_shipped_checkpoints_load_and_track(d, bound):
+    """d <= 0.1: at or below the paper's Table 1 open-loop RMSE. d = 0.2 (SNR 5x lower):
+    a regression bound only; docs/observer.md explains why the KKL trails the EKF there."""
+    system = LEDLinkModel(LinkConstants(distance=d))
+    obs = checkpoint.load(default_checkpoint(d), system)
+    sc = get_scenario("open-loop")
+    out = run(system, sc, obs, Noise.draw(system, sc.n_steps, 7))
+    err = rmse(out["xhat"], out["x"], sc.steady_from)
+    assert err[0] < bound[0] and err[1] < bound[1]

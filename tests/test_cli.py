@@ -1,0 +1,64 @@
+import json
+import subprocess
+import sys
+
+import pytest
+
+from ledsim.cli import main
+
+
+def run_cli(*args):
+    return subprocess.run([sys.executable, "-m", "ledsim.cli", *args], capture_output=True,
+                          text=True, timeout=600)
+
+
+@pytest.mark.parametrize("args,needle", [
+    (["--scenario", "nope"], "nope"),
+    (["--scenario", "if1", "--distance", "0"], "--distance 0.0"),
+    (["--scenario", "if1", "--distance", "-0.1"], "--distance -0.1"),
+    (["--scenario", "if1", "--seeds", "0"], "--seeds 0"),
+    (["--scenario", "if1", "--distance", "0.15"], "no shipped checkpoint"),
+    (["--scenario", "if1", "--checkpoint", "missing.pt"], "does not exist"),
+])
+def test_bad_input_is_one_line_exit_2_and_writes_nothing(tmp_path, args, needle):
+    out = tmp_path / "out"
+    r = run_cli("evaluate", *args, "--out", str(out))
+    assert r.returncode == 2, r.stderr
+    assert needle in r.stderr
+    assert len(r.stderr.strip().splitlines()) == 1
+    assert "Traceback" not in r.stderr
+    assert not out.exists() or not any(out.iterdir())
+
+
+def test_checkpoint_for_other_constants_is_refused(tmp_path):
+    r = run_cli("evaluate", "--scenario", "if1", "--distance", "0.2", "--checkpoint",
+                "assets/checkpoints/kkl_d0.085.pt", "--out", str(tmp_path / "o"))
+    assert r.returncode == 2
+    assert "distance" in r.stderr and len(r.stderr.strip().splitlines()) == 1
+
+
+def test_corrupt_checkpoint_is_refused(tmp_path):
+    bad = tmp_path / "bad.pt"
+    bad.write_text("garbage")
+    r = run_cli("evaluate", "--scenario", "if1", "--checkpoint", str(bad),
+                "--out", str(tmp_path / "o"))
+    assert r.returncode == 2 and "corrupt" in r.stderr
+
+
+def test_evaluate_writes_results_table_and_figures(tmp_path, capsys):
+    out = tmp_path / "ev"
+    code = main(["evaluate", "--scenario", "if1", "--seeds", "2", "--starts", "2",
+                 "--particles", "300", "--workers", "1", "--out", str(out)])
+    assert code == 0
+    res = json.loads((out / "results.json").read_text())
+    assert res["scenario"] == "if1" and res["distance"] == 0.085 and res["seeds"] == 2
+    assert set(res["estimators"]) >= {"kkl", "ekf", "ukf", "pf"}
+    for e in res["estimators"].values():
+        assert set(e["rmse"]) == {"x1", "x2", "y1", "y2"}
+        assert set(e["rmse_steady"]) == {"x1", "x2", "y1", "y2"}
+        assert 0 <= e["converged_fraction"] <= 1 and e["us_per_step"] > 0
+    assert res["paper"]["x1"] == pytest.approx(7.2e-3)
+    assert (out / "states.png").stat().st_size > 10_000
+    assert (out / "powers.png").stat().st_size > 10_000
+    assert "paper" in (out / "table.md").read_text()
+    assert not list(out.glob(".*tmp"))

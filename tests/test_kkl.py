@@ -1,0 +1,123 @@
+import numpy as np
+import pytest
+import torch
+
+from ledsim.scenarios import Noise, get_scenario, run
+from observer.kkl import KKLDesign, stationary_noise_covariance
+from observer.metrics import rmse
+from observer.nets import TanhMLP
+
+
+def test_paper_design_is_literal():
+    d = KKLDesign.paper(0.01)
+    np.testing.assert_allclose(d.eigenvalues, [0.99, 0.98, 0.96, 0.94, 0.92, 0.90])
+    np.testing.assert_array_equal(d.B_array, np.ones((6, 2)))
+
+
+def test_split_design_feeds_each_output_separately():
+    d = KKLDesign.split(0.01, (2, 4))
+    np.testing.assert_array_equal(d.B_array, [[1, 0], [1, 0], [0, 1], [0, 1]])
+
+
+def test_stationary_covariance_solves_lyapunov(rng):
+    lam = np.array([0.9, 0.95, 0.7])
+    B = rng.normal(size=(3, 2))
+    R = np.diag([1e-3, 2e-3])
+    P = stationary_noise_covariance(lam, B, R)
+    A = np.diag(lam)
+    np.testing.assert_allclose(P, A @ P @ A.T + B @ R @ B.T, rtol=1e-12)
+
+
+def test_numpy_export_matches_torch(rng):
+    net = TanhMLP(3, 16, 2, [0.1, 0, 0], [0.5, 1, 2], [1.0, -1.0], [3.0, 0.1])
+    v = rng.normal(size=(7, 3))
+    with torch.no_grad():
+        ref = net(torch.as_tensor(v)).numpy()
+    np.testing.assert_allclose(net.export()(v), ref, rtol=1e-12, atol=1e-12)
+    np.testing.assert_allclose(net.export().vector(v[0]), ref[0], rtol=1e-12, atol=1e-12)
+
+
+def exact_T(obs, system, x, steps=3000):
+    """T(x) = sum_j A^j B h(f^-(j+1)(x)), paper eq. (equat3a), by brute force."""
+    z = np.zeros((len(x), obs.q))
+    xb = np.array(x, dtype=float)
+    for j in range(steps):
+        xb = system.f_inverse(xb)
+        z += obs.eigenvalues**j * (system.h(xb) @ obs.B.T)
+    return z
+
+
+def test_learned_T_solves_the_kkl_pde(tiny_observer, system, rng):
+    x = system.sample_domain(rng, 200)
+    z_true = exact_T(tiny_observer, system, x)
+    rel = np.sqrt(((tiny_observer.encode(x) - z_true) ** 2).mean(axis=0)) / z_true.std(axis=0)
+    # The fast filters are learned to <1%; the slowest (eigenvalue 0.98) is the hard one.
+    assert np.median(rel) < 0.02 and rel.max() < 0.3
+
+
+def test_decoder_inverts_encoder(tiny_observer, system, rng):
+    x = system.sample_domain(rng, 500)
+    err = rmse(tiny_observer.decode(tiny_observer.encode(x)), x)
+    assert np.all(err < 0.02)
+
+
+def test_noise_free_observer_converges_from_the_domain_centre(tiny_observer, system):
+    sc = get_scenario("open-loop")
+    noise = Noise.draw(system, sc.n_steps, 0)
+    noise.measurement[:] = 0
+    noise.process[:] = 0
+    out = run(system, sc, tiny_observer, noise)
+    assert np.all(rmse(out["xhat"], out["x"], sc.steady_from) < [1e-2, 2e-2])
+    # and it really started away from the truth
+    assert abs(out["xhat"][0, 0] - out["x"][0, 0]) > 0.1
+
+
+def test_batched_run_equals_step_by_step(tiny_observer, system, rng):
+    ys = system.h(system.sample_domain(rng, 60)).reshape(20, 3, 2)
+    us = rng.normal(scale=0.1, size=(20, 3))
+    batch = tiny_observer.run_batch(ys, us)
+    batch_free = tiny_observer.run_batch(ys)
+    for j in range(3):
+        tiny_observer.reset()
+        for k in range(20):
+            xh = tiny_observer.update(ys[k, j])
+            np.testing.assert_allclose(xh, batch[k, j], atol=1e-10)
+            tiny_observer.predict(us[k, j])
+        tiny_observer.reset()
+        for k in range(20):
+            np.testing.assert_allclose(tiny_observer.update(ys[k, j]), batch_free[k, j],
+                                       atol=1e-10)
+            tiny_observer.predict(0.0)
+
+
+def test_omega_correction_vanishes_at_u_bar_and_helps_under_input(tiny_observer, system):
+    z = tiny_observer.encode(np.array([[0.1, 0.05]]))
+    np.testing.assert_allclose(tiny_observer.omega_correction(z, 0.0), 0.0, atol=1e-12)
+    sc = get_scenario("if2")
+    noise = Noise.draw(system, sc.n_steps, 3)
+    noise.measurement[:] = 0
+    errs = {}
+    for flag in (True, False):
+        tiny_observer.omega = flag
+        out = run(system, sc, tiny_observer, noise)
+        errs[flag] = rmse(out["xhat"], out["x"], sc.steady_from)[1]
+    tiny_observer.omega = True
+    assert errs[True] < errs[False]
+
+
+@pytest.mark.parametrize("bad", [np.nan, np.inf])
+def test_missing_measurements_never_enter_z(tiny_observer, system, bad):
+    sc = get_scenario("open-loop")
+    noise = Noise.draw(system, sc.n_steps, 1)
+    drop = np.zeros((sc.n_steps, 2), bool)
+    drop[1200:1250, 0] = True  # half a second without photodiode 1
+    drop[1300:1320] = True  # 0.2 s without both
+    tiny_observer.reset()
+    out = run(system, sc, tiny_observer, noise, dropout=drop)
+    assert np.all(np.isfinite(out["xhat"]))
+    assert np.all(np.isfinite(tiny_observer.z))
+    assert rmse(out["xhat"], out["x"], 1400)[0] < 0.01
+    ys = out["y"].copy()
+    ys[drop] = bad
+    batch = tiny_observer.run_batch(ys[:, None, :])
+    assert np.all(np.isfinite(batch))
