@@ -27,8 +27,8 @@ bench: $(STAMP)
 	MUJOCO_GL=osmesa $(BIN)/python scripts/bench.py
 
 tables: $(STAMP)
-	$(BIN)/python scripts/table1.py
-	$(BIN)/python scripts/table2.py
+	$(BIN)/python scripts/tables.py table1
+	$(BIN)/python scripts/tables.py table2
 
 clean:
 	rm -rf $(VENV) out *.egg-info

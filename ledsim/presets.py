@@ -21,5 +21,6 @@ def observer_preset(name: str, Te: float) -> tuple[KKLDesign, TrainingConfig]:
         return KKLDesign.paper(Te), TrainingConfig(
             output_solve=False, encoder_epochs=30, decoder_epochs=30, decoder_noise="none")
     if name == "default":
-        return KKLDesign.split(Te, DEFAULT_RATES, name="default"), TrainingConfig()
+        return KKLDesign.split(Te, DEFAULT_RATES, name="default"), TrainingConfig(
+            decoder_hidden=750, decoder_feature_scale=2.0)
     raise ValueError(f"unknown observer preset {name!r}: use 'default' or 'paper'")

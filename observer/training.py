@@ -35,11 +35,13 @@ class TrainingConfig:
 
     n_samples: int = 200_000  # uniform samples on the domain (paper: 2e5)
     horizon: int = 1  # K of the K-step L_dyn (paper: 1)
-    hidden: int = 500  # tanh units in the one hidden layer of T and T* (paper: 500)
+    hidden: int = 500  # tanh units in the one hidden layer of T (paper: 500)
+    decoder_hidden: int | None = None  # tanh units of T* (None: same as T)
     encoder_epochs: int = 0  # Adam epochs on all weights of T before the output solve
     decoder_epochs: int = 0  # Adam epochs on all weights of T* before the output solve
     output_solve: bool = True  # finish with the exact least-squares output layer
-    feature_scale: float = 4.0  # std x sqrt(n_in) of the initial hidden weights
+    feature_scale: float = 4.0  # std x sqrt(n_in) of the initial hidden weights of T
+    decoder_feature_scale: float | None = None  # the same for T* (None: feature_scale)
     ridge: float = 1e-9  # relative Tikhonov term of the output solve
     batch_size: int = 1024
     lr: float = 2e-3
@@ -251,9 +253,9 @@ def train_kkl(system: DiscreteSystem, design: KKLDesign, config: TrainingConfig 
             P + 1e-12 * np.eye(design.q)).T
     else:
         Zin = Zs
-    decoder = TanhMLP(design.q, cfg.hidden, system.n_state, Zs.mean(0), Zs.std(0), center, half)
+    decoder = TanhMLP(design.q, cfg.decoder_hidden or cfg.hidden, system.n_state, Zs.mean(0), Zs.std(0), center, half)
     if cfg.output_solve:
-        _init_features(decoder, cfg.feature_scale, gen)
+        _init_features(decoder, cfg.decoder_feature_scale or cfg.feature_scale, gen)
     Zin_t = torch.as_tensor(Zin, dtype=torch.float64)
     half_t = torch.as_tensor(half, dtype=torch.float64)
     if cfg.decoder_epochs:

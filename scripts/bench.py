@@ -1,0 +1,105 @@
+"""Speed benchmarks (not tests): observer step costs, batched throughput, training time.
+
+Ratios are measured in one run, next to absolute times, because this machine is noisy.
+Writes docs/bench.md (and prints it).
+
+    python scripts/bench.py [--quick]
+"""
+
+from __future__ import annotations
+
+import argparse
+import os
+import platform
+import time
+from pathlib import Path
+
+import numpy as np
+import torch
+
+from ledsim.config import LinkConstants
+from ledsim.evaluate import default_checkpoint
+from ledsim.paper_model import LEDLinkModel
+from ledsim.presets import observer_preset
+from observer import checkpoint
+from observer.baselines import ExtendedKalmanFilter, ParticleFilter, UnscentedKalmanFilter
+from observer.checkpoint import atomic_write_text
+from observer.training import train_kkl
+
+ROOT = Path(__file__).resolve().parent.parent
+
+
+def step_cost(est, ys, repeats=3) -> float:
+    """Median over repeats of the mean seconds for one update + predict."""
+    times = []
+    for _ in range(repeats):
+        est.reset()
+        t0 = time.perf_counter()
+        for y in ys:
+            est.update(y)
+            est.predict(0.0)
+        times.append((time.perf_counter() - t0) / len(ys))
+    return float(np.median(times))
+
+
+def batched_throughput(obs, n_traj=1024, n_steps=200, dtype=np.float32) -> float:
+    """Observer steps per second (trajectories x steps / s), one core."""
+    rng = np.random.default_rng(0)
+    x = obs.system.sample_domain(rng, n_traj * n_steps)
+    ys = obs.system.h(x).reshape(n_steps, n_traj, -1)
+    obs.run_batch(ys[:10], dtype=dtype)  # warm up
+    best = np.inf
+    for _ in range(3):
+        t0 = time.perf_counter()
+        obs.run_batch(ys, dtype=dtype)
+        best = min(best, time.perf_counter() - t0)
+    return n_traj * n_steps / best
+
+
+def main() -> None:
+    ap = argparse.ArgumentParser(description=__doc__)
+    ap.add_argument("--quick", action="store_true", help="skip the training benchmark")
+    ap.add_argument("--out", default=str(ROOT / "docs" / "bench.md"))
+    args = ap.parse_args()
+    torch.set_num_threads(1)
+    os.environ.setdefault("OMP_NUM_THREADS", "1")
+    system = LEDLinkModel(LinkConstants())
+    kkl = checkpoint.load(default_checkpoint(0.085), system)
+    rng = np.random.default_rng(1)
+    ys = system.h(np.stack([np.linspace(-0.2, 0.2, 2000), np.full(2000, 0.02)], -1))
+    ys = ys + rng.normal(scale=system.measurement_noise_std[0], size=ys.shape)
+
+    rows = []
+    costs = {}
+    for name, est in [("kkl", kkl), ("ekf", ExtendedKalmanFilter(system)),
+                      ("ukf", UnscentedKalmanFilter(system)),
+                      ("pf (5000)", ParticleFilter(system, 5000))]:
+        n = 300 if name.startswith("pf") else 2000
+        costs[name] = step_cost(est, ys[:n])
+    lines = ["# Benchmarks", "",
+             f"`python scripts/bench.py` on {platform.machine()}, {os.cpu_count()} cores, "
+             f"numpy {np.__version__}, torch {torch.__version__}; one thread.", "",
+             "## One observer step (update + predict), single trajectory", "",
+             "| estimator | us / step | cost relative to KKL |", "|---|---|---|"]
+    for name, c in costs.items():
+        lines.append(f"| {name} | {1e6 * c:.1f} | {c / costs['kkl']:.1f}x |")
+    thr32 = batched_throughput(kkl, dtype=np.float32)
+    thr64 = batched_throughput(kkl, dtype=np.float64)
+    lines += ["", "## Batched KKL (1024 trajectories x 200 steps, one core)", "",
+              "| decode precision | observer steps / s |", "|---|---|",
+              f"| float32 | {thr32:.3g} |", f"| float64 | {thr64:.3g} |"]
+    rows.append(thr32)
+    if not args.quick:
+        torch.set_num_threads(2)
+        design, cfg = observer_preset("default", system.Te)
+        _, rep = train_kkl(system, design, cfg, progress=False)
+        lines += ["", "## Training the default observer (2 threads)", "",
+                  f"{rep.seconds:.1f} s for {cfg.n_samples} samples "
+                  f"(L_dyn = {rep.loss_dyn:.2e}, L_recon = {rep.loss_recon:.2e})"]
+    text = "\n".join(lines) + "\n"
+    atomic_write_text(Path(args.out), text)
+    print(text)
+
+
+if __name__ == "__main__":
+    main()
