@@ -56,24 +56,93 @@ def build_parser() -> argparse.ArgumentParser:
     tr.add_argument("--samples", type=_positive_int, default=200_000)
     tr.add_argument("--seed", type=int, default=0)
     tr.add_argument("--out", required=True, help="checkpoint path (.pt)")
+
+    sim = sub.add_parser("simulate", help="run the MuJoCo world headless; save series + plot")
+    sim.add_argument("--seconds", type=_float, default=5.0, help="duration [s]")
+    sim.add_argument("--torque-profile", default="zero",
+                     help="zero, sine, step or chirp (gimbal torque)")
+    sim.add_argument("--torque-amplitude", type=_float, default=0.002, help="[N m]")
+    sim.add_argument("--torque-frequency", type=_float, default=0.5, help="[Hz]")
+    sim.add_argument("--disturbance", action="append", default=[],
+                     help="name[:key=value,...] with name in vibration, current, "
+                          "transmitter, occlusion (repeatable)")
+    sim.add_argument("--distance", type=_float, default=0.085, help="link distance d [m]")
+    sim.add_argument("--torque-limit", type=_float, default=0.05, help="[N m]")
+    sim.add_argument("--gimbal-angle", type=_float, default=0.0, help="initial angle [rad]")
+    sim.add_argument("--scene", help="MJCF scene file (default: assets/led_link.xml)")
+    sim.add_argument("--seed", type=int, default=0, help="measurement-noise seed")
+    sim.add_argument("--out", required=True, help="output folder")
     return p
 
 
 def main(argv: list[str] | None = None) -> int:
     args = build_parser().parse_args(argv)
-    from .evaluate import UserError
+    from .config import ConfigError
+    from .errors import UserError
 
     try:
         if args.command == "evaluate":
             return _evaluate(args)
         if args.command == "train":
             return _train(args)
-    except UserError as exc:
+        if args.command == "simulate":
+            return _simulate(args)
+    except (UserError, ConfigError) as exc:
         print(f"ledsim: error: {exc}", file=sys.stderr)
         return EXIT_USAGE
     except KeyboardInterrupt:
         print("ledsim: interrupted", file=sys.stderr)
         return 130
+    return 0
+
+
+def _writable_dir(path: str) -> Path:
+    from .errors import UserError
+
+    out = Path(path)
+    if out.exists() and not out.is_dir():
+        raise UserError(f"--out {path!r} exists and is not a folder")
+    try:
+        out.mkdir(parents=True, exist_ok=True)
+    except OSError as exc:
+        raise UserError(f"--out {path!r} cannot be created: {exc.strerror}") from None
+    return out
+
+
+def _simulate(args) -> int:
+    from .config import LinkConstants
+    from .disturbances import DisturbanceError, parse_disturbance
+    from .errors import UserError
+    from .sensor import IrradianceSensor
+    from .simulation import ProfileError, plot_result, simulate, torque_profile
+    from .world import SCENE, LinkWorld, WorldConfig, WorldError
+
+    if not args.seconds > 0:
+        raise UserError(f"--seconds {args.seconds!r} is not allowed: must be > 0")
+    try:
+        profile = torque_profile(args.torque_profile, args.torque_amplitude,
+                                 args.torque_frequency)
+        disturbances = [parse_disturbance(d) for d in args.disturbance]
+        config = WorldConfig(constants=LinkConstants(distance=args.distance),
+                             torque_limit=args.torque_limit,
+                             xml=Path(args.scene) if args.scene else SCENE)
+        world = LinkWorld(config)
+        world.reset(gimbal_angle=args.gimbal_angle)
+        sensor = IrradianceSensor(world, seed=args.seed)
+    except (WorldError, DisturbanceError, ProfileError) as exc:
+        raise UserError(str(exc)) from None
+    t0 = time.perf_counter()
+    res = simulate(world, sensor, args.seconds, profile, disturbances, progress=True)
+    wall = time.perf_counter() - t0
+    out = _writable_dir(args.out)
+    res.save_npz(out / "series.npz")
+    res.save_csv(out / "series.csv")
+    title = f"d = {args.distance:g} m, torque {args.torque_profile}" + (
+        f", {', '.join(args.disturbance)}" if args.disturbance else "")
+    plot_result(res, out / "series.png", title)
+    print(f"simulated {args.seconds:g} s ({len(res.t)} steps) in {wall:.2f} s "
+          f"({args.seconds / wall:.0f}x real time); wrote {out}/series.npz, series.csv, "
+          "series.png")
     return 0
 
 
@@ -99,7 +168,7 @@ def _train(args) -> int:
     from observer.training import train_kkl
 
     from .config import LinkConstants
-    from .evaluate import UserError
+    from .errors import UserError
     from .paper_model import LEDLinkModel
     from .presets import observer_preset
 

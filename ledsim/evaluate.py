@@ -21,16 +21,13 @@ from observer.estimator import Estimator
 from observer.metrics import converged, mean_and_spread, rmse
 
 from .config import LinkConstants
+from .errors import UserError
 from .paper_model import LEDLinkModel
 from .scenarios import PAPER_TABLE1, PAPER_TABLE2, Noise, Scenario, get_scenario, run
 
 ASSETS = Path(__file__).resolve().parent.parent / "assets"
 CHECKPOINT_DIR = ASSETS / "checkpoints"
 CONVERGENCE_TOLERANCE = 0.02  # rad: steady-state x1 RMSE below this counts as converged
-
-
-class UserError(Exception):
-    """Bad user input: reported as one line, exit code 2."""
 
 
 def default_checkpoint(distance: float, design: str = "default") -> Path:

@@ -253,7 +253,8 @@ def train_kkl(system: DiscreteSystem, design: KKLDesign, config: TrainingConfig 
             P + 1e-12 * np.eye(design.q)).T
     else:
         Zin = Zs
-    decoder = TanhMLP(design.q, cfg.decoder_hidden or cfg.hidden, system.n_state, Zs.mean(0), Zs.std(0), center, half)
+    decoder = TanhMLP(design.q, cfg.decoder_hidden or cfg.hidden, system.n_state, Zs.mean(0),
+                      Zs.std(0), center, half)
     if cfg.output_solve:
         _init_features(decoder, cfg.decoder_feature_scale or cfg.feature_scale, gen)
     Zin_t = torch.as_tensor(Zin, dtype=torch.float64)

@@ -62,3 +62,34 @@ def test_evaluate_writes_results_table_and_figures(tmp_path, capsys):
     assert (out / "powers.png").stat().st_size > 10_000
     assert "paper" in (out / "table.md").read_text()
     assert not list(out.glob(".*tmp"))
+
+
+@pytest.mark.parametrize("args,needle", [
+    (["--distance", "0"], "distance"),
+    (["--torque-limit", "0"], "torque_limit"),
+    (["--disturbance", "tornado"], "tornado"),
+    (["--torque-profile", "wobble"], "wobble"),
+    (["--seconds", "-1"], "--seconds"),
+    (["--scene", "missing.xml"], "does not exist"),
+])
+def test_simulate_bad_input_is_one_line_exit_2(tmp_path, args, needle):
+    out = tmp_path / "sim"
+    r = run_cli("simulate", *args, "--out", str(out))
+    assert r.returncode == 2, r.stderr
+    assert needle in r.stderr and len(r.stderr.strip().splitlines()) == 1
+    assert not out.exists()
+
+
+def test_simulate_writes_series_and_plot(tmp_path):
+    import numpy as np
+
+    out = tmp_path / "sim"
+    code = main(["simulate", "--seconds", "1", "--torque-profile", "sine",
+                 "--disturbance", "occlusion:start=0.3,duration=0.3", "--out", str(out)])
+    assert code == 0
+    data = np.load(out / "series.npz")
+    assert data["phi"].shape == (100,) and data["power"].shape == (100, 2)
+    assert data["occluded"].any()
+    header = (out / "series.csv").read_text().splitlines()[0].split(",")
+    assert {"t", "phi", "phidot", "power_1", "power_2", "occluded_1"} <= set(header)
+    assert (out / "series.png").stat().st_size > 10_000

@@ -1,0 +1,167 @@
+"""Disturbances acting on the link, applied once per control period before physics.
+
+Each is a small dataclass with an ``apply(world, t)`` method (t in s) and its knobs as
+fields; :func:`parse_disturbance` builds one from ``name[:key=value,...]`` (the CLI form).
+
+================  ============================================================
+name              what it does
+================  ============================================================
+vibration         sinusoidal yaw torque and sway force on the AUV hull
+current           water current: steady velocity plus random gusts (opt.wind)
+transmitter       the LED platform sways sideways and rotates (yaw)
+occlusion         a plate crosses the line of sight for ``duration`` seconds
+================  ============================================================
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, fields
+
+import numpy as np
+
+from .world import LinkWorld
+
+
+class DisturbanceError(ValueError):
+    """Unknown disturbance name or bad parameter."""
+
+
+@dataclass
+class HullVibration:
+    """Hull vibration: ``torque sin(2 pi f t)`` about z and ``force sin(2 pi f t)`` along y.
+
+    Attributes:
+        frequency: vibration frequency f [Hz].
+        torque: yaw torque amplitude on the hull [N m].
+        force: sway force amplitude on the hull [N].
+    """
+
+    frequency: float = 2.0
+    torque: float = 0.5
+    force: float = 0.0
+
+    def apply(self, world: LinkWorld, t: float) -> None:
+        s = math.sin(2 * math.pi * self.frequency * t)
+        xfrc = world.data.xfrc_applied[world.auv_id]
+        xfrc[1] = self.force * s
+        xfrc[5] = self.torque * s
+
+
+@dataclass
+class WaterCurrent:
+    """Water current through MuJoCo's medium velocity (``opt.wind``).
+
+    Attributes:
+        speed: steady current speed [m/s].
+        heading: direction of the current in the horizontal plane [rad] (0 = +x).
+        gust: standard deviation of the gusts [m/s] (Ornstein-Uhlenbeck process).
+        gust_time: correlation time of the gusts [s].
+        seed: seed of the gusts.
+    """
+
+    speed: float = 0.2
+    heading: float = math.pi / 2
+    gust: float = 0.05
+    gust_time: float = 1.0
+    seed: int = 0
+
+    def __post_init__(self):
+        self._rng = np.random.default_rng(self.seed)
+        self._g = np.zeros(3)
+        self._last_t = None
+
+    def apply(self, world: LinkWorld, t: float) -> None:
+        dt = 0.0 if self._last_t is None else t - self._last_t
+        self._last_t = t
+        if dt > 0 and self.gust > 0:
+            a = math.exp(-dt / self.gust_time)
+            self._g = a * self._g + self.gust * math.sqrt(1 - a * a) * \
+                self._rng.standard_normal(3) * np.array([1.0, 1.0, 0.3])
+        steady = self.speed * np.array([math.cos(self.heading), math.sin(self.heading), 0.0])
+        world.model.opt.wind[:] = steady + self._g
+
+
+@dataclass
+class TransmitterMotion:
+    """The LED platform sways sideways and yaws sinusoidally.
+
+    Attributes:
+        sway: lateral (y) amplitude [m].
+        frequency: motion frequency [Hz].
+        yaw: yaw amplitude of the LED axis [rad] (changes theta).
+    """
+
+    sway: float = 0.005
+    frequency: float = 0.5
+    yaw: float = 0.0
+
+    def apply(self, world: LinkWorld, t: float) -> None:
+        w = 2 * math.pi * self.frequency
+        pos = world.transmitter_home + np.array([0.0, self.sway * math.sin(w * t), 0.0])
+        vel = np.array([0.0, self.sway * w * math.cos(w * t), 0.0])
+        world.set_transmitter(pos, vel)
+        if self.yaw:
+            a = self.yaw * math.sin(w * t)
+            world.data.mocap_quat[world.tx_mocap] = [math.cos(a / 2), 0.0, 0.0, math.sin(a / 2)]
+
+
+@dataclass
+class Occlusion:
+    """A plate slides down through the line of sight.
+
+    Attributes:
+        start: time the plate's leading edge reaches the beam [s].
+        duration: time the beam centre stays covered [s].
+    """
+
+    start: float = 1.0
+    duration: float = 0.5
+
+    def apply(self, world: LinkWorld, t: float) -> None:
+        g = world.model.geom("occluder_plate")
+        half = float(g.size[2])
+        speed = 2 * half / self.duration  # covers the beam centre for `duration`
+        mid = world.link_midpoint()
+        z = mid[2] + half - speed * (t - self.start)
+        z = min(max(z, mid[2] - 3 * half), mid[2] + 3 * half)
+        world.set_occluder([mid[0], mid[1], z])
+
+    def covers(self, t: float) -> bool:
+        """Whether the plate is over the beam centre at time t (for the flags)."""
+        return self.start <= t < self.start + self.duration
+
+
+DISTURBANCES = {
+    "vibration": HullVibration,
+    "current": WaterCurrent,
+    "transmitter": TransmitterMotion,
+    "occlusion": Occlusion,
+}
+
+
+def parse_disturbance(text: str):
+    """``"vibration:frequency=3,torque=0.2"`` -> HullVibration(frequency=3, torque=0.2)."""
+    name, _, args = text.partition(":")
+    if name not in DISTURBANCES:
+        raise DisturbanceError(f"unknown disturbance {name!r}: choose from "
+                               f"{', '.join(DISTURBANCES)}")
+    cls = DISTURBANCES[name]
+    allowed = {f.name: f.type for f in fields(cls)}
+    kwargs = {}
+    for item in filter(None, args.split(",")):
+        key, eq, value = item.partition("=")
+        if not eq or key not in allowed:
+            raise DisturbanceError(f"bad parameter {item!r} for {name}: use key=value with "
+                                   f"key in {', '.join(allowed)}")
+        try:
+            kwargs[key] = int(value) if key == "seed" else float(value)
+        except ValueError:
+            raise DisturbanceError(f"bad value {value!r} for {name}.{key}: not a number") \
+                from None
+        if not math.isfinite(kwargs[key]):
+            raise DisturbanceError(f"bad value {value!r} for {name}.{key}: must be finite")
+    for key in ("frequency", "duration", "gust_time"):
+        if key in kwargs and kwargs[key] <= 0:
+            raise DisturbanceError(f"{name}.{key}={kwargs[key]!r} is not allowed: must be > 0")
+    return cls(**kwargs)

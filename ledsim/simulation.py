@@ -1,0 +1,214 @@
+"""Headless simulation loop at the control period Te, with physics substeps.
+
+One pass at step k (t = k Te): disturbances act, kinematics are updated, the sensor
+samples y_k and the true state x_k = (phi, phidot) of photodiode 1, the gimbal torque
+u_k is chosen (a profile, or a controller fed with the sensor reading), and physics
+advances by Te in ``substeps`` MuJoCo steps.
+"""
+
+from __future__ import annotations
+
+import csv
+import math
+from collections.abc import Callable, Sequence
+from dataclasses import dataclass, fields
+from pathlib import Path
+
+import mujoco
+import numpy as np
+from tqdm.auto import tqdm
+
+from .optics import receiver_response, transmitter_gain
+from .sensor import IrradianceSensor, SensorReading
+from .world import LinkWorld
+
+
+class ProfileError(ValueError):
+    """Unknown torque profile or bad parameter."""
+
+
+def torque_profile(name: str, amplitude: float = 0.005, frequency: float = 0.5,
+                   start: float = 0.5) -> Callable[[float], float]:
+    """Open-loop gimbal torque u(t) [N m].
+
+    ``zero``; ``sine``: amplitude sin(2 pi frequency t); ``step``: amplitude from ``start``;
+    ``chirp``: sine sweeping from 0.1 to ``frequency`` Hz over 10 s.
+    """
+    if name == "zero":
+        return lambda t: 0.0
+    if name == "sine":
+        return lambda t: amplitude * math.sin(2 * math.pi * frequency * t)
+    if name == "step":
+        return lambda t: amplitude if t >= start else 0.0
+    if name == "chirp":
+        return lambda t: amplitude * math.sin(
+            2 * math.pi * (0.1 * t + (frequency - 0.1) * t * t / 20.0))
+    raise ProfileError(f"unknown torque profile {name!r}: choose from zero, sine, step, chirp")
+
+
+@dataclass
+class SimulationResult:
+    """Time series of a run; arrays have one row per control step.
+
+    Attributes:
+        t [s], phi [rad], phidot [rad/s] (true state of photodiode 1), gimbal_angle [rad],
+        gimbal_rate [rad/s], torque [N m], power and power_clean [W] (N, 2),
+        incidence_angle and emission_angle [rad] (N, 2), distance [m] (N, 2),
+        visible_fraction (N, 2), occluded (N, 2) bool (any aperture ray blocked),
+        hull_pos [m] (N, 3).
+    """
+
+    t: np.ndarray
+    phi: np.ndarray
+    phidot: np.ndarray
+    gimbal_angle: np.ndarray
+    gimbal_rate: np.ndarray
+    torque: np.ndarray
+    power: np.ndarray
+    power_clean: np.ndarray
+    incidence_angle: np.ndarray
+    emission_angle: np.ndarray
+    distance: np.ndarray
+    visible_fraction: np.ndarray
+    occluded: np.ndarray
+    hull_pos: np.ndarray
+
+    @property
+    def x(self) -> np.ndarray:
+        """True state (phi, phidot), shape (N, 2)."""
+        return np.stack([self.phi, self.phidot], axis=-1)
+
+    def arrays(self) -> dict[str, np.ndarray]:
+        return {f.name: getattr(self, f.name) for f in fields(self)}
+
+    def save_npz(self, path: Path) -> None:
+        from observer.checkpoint import atomic_write_bytes
+
+        atomic_write_bytes(Path(path), lambda tmp: np.savez_compressed(
+            open(tmp, "wb"), **self.arrays()))
+
+    def csv_columns(self) -> dict[str, np.ndarray]:
+        cols = {}
+        for name, a in self.arrays().items():
+            if a.ndim == 1:
+                cols[name] = a
+            else:
+                suffix = "xyz" if name == "hull_pos" else "12"
+                for j in range(a.shape[1]):
+                    cols[f"{name}_{suffix[j]}"] = a[:, j]
+        return cols
+
+    def save_csv(self, path: Path) -> None:
+        from observer.checkpoint import atomic_write_bytes
+
+        cols = self.csv_columns()
+
+        def write(tmp):
+            with open(tmp, "w", newline="") as fh:
+                writer = csv.writer(fh)
+                writer.writerow(list(cols))
+                for row in zip(*cols.values(), strict=True):
+                    writer.writerow([f"{v:.9g}" if isinstance(v, float) else int(v)
+                                     for v in row])
+
+        atomic_write_bytes(Path(path), write)
+
+
+def _update_kinematics(world: LinkWorld) -> None:
+    m, d = world.model, world.data
+    mujoco.mj_kinematics(m, d)
+    mujoco.mj_comPos(m, d)
+    mujoco.mj_comVel(m, d)
+
+
+def simulate(world: LinkWorld, sensor: IrradianceSensor, seconds: float,
+             torque: Callable[[float], float] | None = None,
+             disturbances: Sequence = (),
+             controller: Callable[[SensorReading, float], float] | None = None,
+             progress: bool = False) -> SimulationResult:
+    """Run the world for ``seconds`` at the control period Te.
+
+    Args:
+        world, sensor: the scene and its photodiode sensor (state as it is now).
+        seconds: duration [s].
+        torque: open-loop torque profile u(t) [N m] (ignored when ``controller`` is set).
+        disturbances: objects with ``apply(world, t)``.
+        controller: ``controller(reading, t) -> torque`` for closed-loop runs.
+        progress: show a progress bar.
+    """
+    Te = world.config.constants.Te
+    n = int(round(seconds / Te))
+    torque = torque or (lambda t: 0.0)
+    geo = np.empty((n, 4, 2))  # d, theta, phi, visible fraction
+    state = np.empty((n, 2))
+    gimbal = np.empty((n, 2))
+    applied = np.empty(n)
+    hull = np.empty((n, 3))
+    power = np.empty((n, 2)) if controller else None
+    t0 = world.time
+    for k in tqdm(range(n), disable=not progress, desc="simulate", leave=False):
+        t = t0 + k * Te
+        for dist in disturbances:
+            dist.apply(world, t)
+        _update_kinematics(world)
+        if controller is None:
+            geo[k] = sensor.geometry()
+            state[k] = geo[k, 2, 0], sensor.incidence_rate(0)
+            u = torque(t)
+        else:
+            r = sensor.read()
+            geo[k] = r.distance, r.emission_angle, r.incidence_angle, r.visible_fraction
+            state[k] = r.phi, r.phidot
+            power[k] = r.power
+            u = controller(r, t)
+        gimbal[k] = world.gimbal_angle, world.gimbal_rate
+        hull[k] = world.hull_pos
+        applied[k] = world.set_torque(u)
+        world.step()
+    c = world.config.constants
+    d_, th, ph, vis = geo[:, 0], geo[:, 1], geo[:, 2], geo[:, 3]
+    clean = vis * transmitter_gain(d_, th, c) * receiver_response(ph, c.receiver)
+    if power is None:
+        power = clean + sensor.rng.standard_normal(clean.shape) * sensor.noise_std
+    return SimulationResult(
+        t=t0 + np.arange(n) * Te, phi=state[:, 0], phidot=state[:, 1],
+        gimbal_angle=gimbal[:, 0], gimbal_rate=gimbal[:, 1], torque=applied,
+        power=power, power_clean=clean, incidence_angle=ph, emission_angle=th,
+        distance=d_, visible_fraction=vis, occluded=vis < 1.0, hull_pos=hull)
+
+
+def plot_result(res: SimulationResult, path: Path, title: str = "") -> None:
+    """Angles, powers and torque of a run, one PNG."""
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    from observer.checkpoint import atomic_write_bytes
+
+    fig, axes = plt.subplots(3, 1, figsize=(9, 7.5), sharex=True)
+    ax = axes[0]
+    ax.plot(res.t, res.phi, label="phi (photodiode 1) [rad]")
+    ax.plot(res.t, res.phidot, label="phidot [rad/s]", alpha=0.7)
+    ax.set_ylabel("true state")
+    ax.legend(fontsize=8)
+    ax = axes[1]
+    for j in range(2):
+        ax.plot(res.t, res.power[:, j], lw=0.6, alpha=0.5, color=f"C{j}")
+        ax.plot(res.t, res.power_clean[:, j], lw=1.5, color=f"C{j}", label=f"P{j + 1}")
+    occ = res.occluded.any(axis=1)
+    if occ.any():
+        ax.fill_between(res.t, 0, 1, where=occ, transform=ax.get_xaxis_transform(),
+                        color="k", alpha=0.12, label="line of sight blocked")
+    ax.set_ylabel("power [W]")
+    ax.legend(fontsize=8)
+    axes[2].plot(res.t, res.torque, color="C3")
+    axes[2].set_ylabel("torque [N m]")
+    axes[2].set_xlabel("time [s]")
+    for a in axes:
+        a.grid(alpha=0.3)
+    if title:
+        axes[0].set_title(title)
+    fig.tight_layout()
+    atomic_write_bytes(Path(path), lambda tmp: fig.savefig(tmp, dpi=110, format="png"))
+    plt.close(fig)

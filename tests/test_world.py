@@ -1,0 +1,184 @@
+import math
+
+import numpy as np
+import pytest
+
+from ledsim.config import ConfigError, LinkConstants
+from ledsim.disturbances import DisturbanceError, parse_disturbance
+from ledsim.sensor import IrradianceSensor
+from ledsim.simulation import simulate
+from ledsim.world import SCENE, LinkWorld, WorldConfig, WorldError
+
+HINGE = np.array([0.89, 0.0, 0.0])  # receiver centre = gimbal hinge, from the MJCF
+
+
+@pytest.fixture(scope="module")
+def world():
+    return LinkWorld()
+
+
+def paper_power(c, d, theta, phi):
+    """eq. (pow-d-theta-phi) written out again, independently of ledsim.optics."""
+    r = c.receiver
+    m = math.log(0.5) / math.log(math.cos(c.led_half_angle))
+    g = (r.a1 * math.exp(-(((phi - r.b1) / r.c1) ** 2))
+         + r.a2 * math.exp(-(((phi + r.b2) / r.c2) ** 2)))
+    return c.power_scale * math.exp(-c.attenuation * d) / d**2 * math.cos(theta) ** m * g
+
+
+def test_sensor_matches_the_paper_formula_at_a_known_geometry(world):
+    c = world.config.constants
+    q = 0.13
+    world.reset(gimbal_angle=q)
+    reading = IrradianceSensor(world, noise=False).read(noise=False)
+    led = HINGE + [c.distance, 0.0, 0.0]
+    for i, (z, offset) in enumerate([(0.003, 0.0), (-0.003, -c.dphi)]):
+        pd = HINGE + [0.0, 0.0, z]
+        los = led - pd
+        d = np.linalg.norm(los)
+        theta = math.acos(los[0] / d)  # LED axis is -x
+        normal_angle = q + offset
+        phi = math.atan2(los[1], los[0]) - normal_angle  # about +z, in the x-y plane
+        expected = paper_power(c, d, theta, phi)
+        assert reading.power_clean[i] == pytest.approx(expected, rel=1e-9)
+        assert reading.incidence_angle[i] == pytest.approx(phi, abs=1e-12)
+
+
+def test_blocking_the_line_of_sight_zeroes_only_the_blocked_photodiode(world):
+    world.reset()
+    sensor = IrradianceSensor(world, noise=False)
+    # Plate 5 mm in front of the receiver with its lower edge at z = 0: it covers the
+    # rays of photodiode 1 (z = +3 mm) and none of photodiode 2's (z = -3 mm).
+    world.set_occluder(HINGE + [0.005, 0.0, 0.03])
+    from ledsim.simulation import _update_kinematics
+
+    _update_kinematics(world)
+    r = sensor.read(noise=False)
+    assert r.power_clean[0] == 0.0 and r.visible_fraction[0] == 0.0
+    assert r.power_clean[1] > 0.5 and r.visible_fraction[1] == 1.0
+    world.set_occluder(HINGE + [0.005, 0.0, 0.03 + 0.0029])  # edge between the rays
+    _update_kinematics(world)
+    partial = sensor.read(noise=False).visible_fraction[0]
+    assert 0.0 < partial < 1.0
+    world.reset()
+
+
+def test_power_falls_with_distance_as_exp_over_d_squared():
+    c = LinkConstants()
+    r = {}
+    for d in (0.085, 0.17):
+        w = LinkWorld(WorldConfig(constants=c.with_(distance=d)))
+        r[d] = IrradianceSensor(w, noise=False).read(noise=False)
+    a, b = r[0.085], r[0.17]
+    assert b.distance[0] == pytest.approx(math.hypot(0.17, 0.003), rel=1e-12)
+    m = c.lambertian_order
+    law = (math.exp(-c.attenuation * b.distance[0]) / b.distance[0] ** 2
+           * math.cos(b.emission_angle[0]) ** m) / (
+        math.exp(-c.attenuation * a.distance[0]) / a.distance[0] ** 2
+        * math.cos(a.emission_angle[0]) ** m)
+    assert b.power_clean[0] / a.power_clean[0] == pytest.approx(law, rel=1e-9)
+    assert b.power_clean[0] / a.power_clean[0] < 0.26
+
+
+def test_turning_the_gimbal_by_dphi_puts_photodiode_2_where_photodiode_1_was(world):
+    c = world.config.constants
+    sensor = IrradianceSensor(world, noise=False)
+    world.reset(gimbal_angle=0.05)
+    before = sensor.read(noise=False)
+    world.reset(gimbal_angle=0.05 + c.dphi)
+    after = sensor.read(noise=False)
+    assert after.incidence_angle[1] == pytest.approx(before.incidence_angle[0], abs=1e-12)
+    assert after.power_clean[1] == pytest.approx(before.power_clean[0], rel=1e-9)
+    world.reset()
+
+
+def test_true_rate_matches_the_finite_difference_of_phi(world):
+    sensor = IrradianceSensor(world, noise=False)
+    world.reset(gimbal_angle=0.1, gimbal_rate=0.7)
+    res = simulate(world, sensor, 0.2)
+    fd = np.gradient(res.phi, res.t)
+    np.testing.assert_allclose(res.phidot[5:-5], fd[5:-5], atol=0.02)
+    world.reset()
+
+
+def spin_down(density, viscosity):
+    w = LinkWorld(WorldConfig(water_density=density, water_viscosity=viscosity))
+    w.reset(gimbal_rate=5.0)
+    simulate(w, IrradianceSensor(w), 1.0)
+    return abs(w.gimbal_rate)
+
+
+def test_water_damps_a_free_spinning_gimbal_more_than_air():
+    in_water = spin_down(1000.0, 0.00089)
+    in_air = spin_down(1.2, 1.8e-5)
+    assert in_water < 0.7 * in_air
+
+
+def test_neutrally_buoyant_hull_drifts_less_than_a_centimetre_in_ten_seconds():
+    w = LinkWorld()
+    w.reset()
+    res = simulate(w, IrradianceSensor(w), 10.0)
+    assert np.linalg.norm(res.hull_pos[-1] - res.hull_pos[0]) < 0.01
+    # and the check can fail: without buoyancy the same hull sinks
+    w.reset()
+    w.model.body_gravcomp[w.auv_id] = 0.0
+    res = simulate(w, IrradianceSensor(w), 1.0)
+    assert np.linalg.norm(res.hull_pos[-1] - res.hull_pos[0]) > 0.01
+
+
+def test_occlusion_disturbance_blocks_for_about_its_duration(world):
+    world.reset()
+    sensor = IrradianceSensor(world)
+    res = simulate(world, sensor, 2.0, disturbances=[parse_disturbance(
+        "occlusion:start=0.5,duration=0.5")])
+    blocked = (res.visible_fraction == 0).all(axis=1).mean() * 2.0  # both fully blocked [s]
+    assert 0.4 < blocked < 0.6
+    assert np.all(res.power_clean[res.visible_fraction == 0] == 0)
+    assert res.occluded.all(axis=1).sum() > 40
+    world.reset()
+
+
+def test_transmitter_motion_and_current_move_the_link(world):
+    world.reset()
+    res = simulate(world, IrradianceSensor(world), 2.0, disturbances=[
+        parse_disturbance("transmitter:sway=0.01,frequency=1"),
+        parse_disturbance("current:speed=0.3")])
+    assert np.ptp(res.phi) > 0.05
+    assert np.linalg.norm(res.hull_pos[-1] - res.hull_pos[0]) > 0.01
+    world.reset()
+
+
+def test_missing_and_malformed_scene_files(tmp_path):
+    with pytest.raises(WorldError, match="does not exist"):
+        LinkWorld(WorldConfig(xml=tmp_path / "nope.xml"))
+    bad = tmp_path / "bad.xml"
+    bad.write_text("<mujoco><worldbody><body></mujoco>")
+    with pytest.raises(WorldError, match="not valid MJCF"):
+        LinkWorld(WorldConfig(xml=bad))
+    no_pd2 = tmp_path / "no_pd2.xml"
+    no_pd2.write_text(SCENE.read_text().replace('name="pd2"', 'name="pdX"'))
+    with pytest.raises(WorldError, match="'pd2'"):
+        LinkWorld(WorldConfig(xml=no_pd2))
+
+
+@pytest.mark.parametrize("kwargs,name", [({"torque_limit": 0.0}, "torque_limit"),
+                                         ({"torque_limit": -1.0}, "torque_limit"),
+                                         ({"timestep": 0.003}, "timestep")])
+def test_bad_world_knobs_are_named(kwargs, name):
+    with pytest.raises(ConfigError, match=name):
+        WorldConfig(**kwargs)
+
+
+def test_led_without_line_of_sight_is_refused():
+    w = LinkWorld(WorldConfig(led_yaw=math.pi))
+    with pytest.raises(WorldError, match="no line of sight"):
+        IrradianceSensor(w)
+
+
+def test_bad_disturbances_are_named():
+    with pytest.raises(DisturbanceError, match="tornado"):
+        parse_disturbance("tornado")
+    with pytest.raises(DisturbanceError, match="colour"):
+        parse_disturbance("vibration:colour=3")
+    with pytest.raises(DisturbanceError, match="frequency"):
+        parse_disturbance("vibration:frequency=0")
