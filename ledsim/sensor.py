@@ -106,12 +106,14 @@ class IrradianceSensor:
         w = self.world
         origin = w.photodiode_pos(i)
         vec = (self.aperture_points() if targets is None else targets) - origin
-        length = np.sqrt(np.einsum("ij,ij->i", vec, vec))
+        length = np.sqrt((vec * vec).sum(axis=1))
         vec /= length[:, None]
         mujoco.mj_multiRay(w.model, w.data, origin, vec.ravel(), RAY_GROUPS, 1, w.gimbal_id,
                            self._geomid, self._dist, None, len(vec), float(length.max()))
-        blocked = (self._dist >= 0) & (self._dist < length)
-        return 1.0 - float(np.count_nonzero(blocked)) / len(vec)
+        # mj_multiRay reports -1 for rays that hit nothing before the cutoff.
+        blocked = sum(1 for dist, n in zip(self._dist.tolist(), length.tolist(), strict=True)
+                      if 0.0 <= dist < n)
+        return 1.0 - blocked / len(vec)
 
     def geometry(self) -> tuple[list, list, list, list]:
         """(d, theta, phi, visible fraction) of both photodiodes at the current state.
@@ -155,8 +157,12 @@ class IrradianceSensor:
         """d(phi_i)/dt [rad/s]: line-of-sight rotation minus photodiode rotation, about the
         hinge axis (exact for rotations about that axis)."""
         w = self.world
-        los = w.led_pos - w.photodiode_pos(i)
-        v_pd = w.site_velocity(w.pd_ids[i])
-        v_rel = w.transmitter_velocity - v_pd[3:]
-        omega_los = np.cross(los, v_rel) / (los @ los)
-        return float((omega_los - v_pd[:3]) @ w.hinge_axis)
+        lx, ly, lz = (w.led_pos - w.photodiode_pos(i)).tolist()
+        wx, wy, wz, vx, vy, vz = w.site_velocity(w.pd_ids[i]).tolist()
+        tx, ty, tz = w.transmitter_velocity.tolist()
+        rx, ry, rz = tx - vx, ty - vy, tz - vz
+        d2 = lx * lx + ly * ly + lz * lz
+        hx, hy, hz = w.hinge_axis.tolist()
+        omega_los = ((ly * rz - lz * ry) * hx + (lz * rx - lx * rz) * hy
+                     + (lx * ry - ly * rx) * hz) / d2
+        return omega_los - (wx * hx + wy * hy + wz * hz)

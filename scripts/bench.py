@@ -56,6 +56,24 @@ def batched_throughput(obs, n_traj=1024, n_steps=200, dtype=np.float32) -> float
     return n_traj * n_steps / best
 
 
+def world_speed(timestep: float, seconds: float = 20.0, repeats: int = 3) -> tuple[float, float]:
+    """(control steps per second, real-time factor) of physics + ray sensor, open loop."""
+    from ledsim.sensor import IrradianceSensor
+    from ledsim.simulation import simulate
+    from ledsim.world import LinkWorld, WorldConfig
+
+    world = LinkWorld(WorldConfig(timestep=timestep))
+    sensor = IrradianceSensor(world)
+    best = np.inf
+    for _ in range(repeats):
+        world.reset(0.1)
+        t0 = time.perf_counter()
+        simulate(world, sensor, seconds)
+        best = min(best, time.perf_counter() - t0)
+    steps = seconds / world.config.constants.Te
+    return steps / best, seconds / best
+
+
 def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__)
     ap.add_argument("--quick", action="store_true", help="skip the training benchmark")
@@ -69,7 +87,6 @@ def main() -> None:
     ys = system.h(np.stack([np.linspace(-0.2, 0.2, 2000), np.full(2000, 0.02)], -1))
     ys = ys + rng.normal(scale=system.measurement_noise_std[0], size=ys.shape)
 
-    rows = []
     costs = {}
     for name, est in [("kkl", kkl), ("ekf", ExtendedKalmanFilter(system)),
                       ("ukf", UnscentedKalmanFilter(system)),
@@ -88,7 +105,12 @@ def main() -> None:
     lines += ["", "## Batched KKL (1024 trajectories x 200 steps, one core)", "",
               "| decode precision | observer steps / s |", "|---|---|",
               f"| float32 | {thr32:.3g} |", f"| float64 | {thr64:.3g} |"]
-    rows.append(thr32)
+    lines += ["", "## MuJoCo world: physics + ray-based sensor, open loop (one core)", "",
+              "| physics timestep | substeps per Te | control steps / s | real-time factor |",
+              "|---|---|---|---|"]
+    for dt in (0.002, 0.005, 0.01):
+        sps, rtf = world_speed(dt)
+        lines.append(f"| {dt * 1e3:g} ms | {round(0.01 / dt)} | {sps:.3g} | {rtf:.0f}x |")
     if not args.quick:
         torch.set_num_threads(2)
         design, cfg = observer_preset("default", system.Te)
