@@ -93,3 +93,28 @@ def test_simulate_writes_series_and_plot(tmp_path):
     header = (out / "series.csv").read_text().splitlines()[0].split(",")
     assert {"t", "phi", "phidot", "power_1", "power_2", "occluded_1"} <= set(header)
     assert (out / "series.png").stat().st_size > 10_000
+
+
+@pytest.mark.parametrize("args,needle", [
+    (["--scenario", "dance"], "dance"),
+    (["--estimator", "crystal-ball"], "crystal-ball"),
+    (["--disturbance", "tornado"], "tornado"),
+    (["--torque-limit", "0"], "--torque-limit"),
+    (["--checkpoint", "assets/checkpoints/kkl_d0.085.pt"], "trained with"),
+])
+def test_run_bad_input_is_one_line_exit_2(tmp_path, args, needle):
+    out = tmp_path / "run"
+    r = run_cli("run", "--seeds", "1", *args, "--out", str(out))
+    assert r.returncode == 2, r.stderr
+    assert needle in r.stderr and len(r.stderr.strip().splitlines()) == 1
+    assert not out.exists()
+
+
+def test_run_writes_results_and_plot(tmp_path):
+    out = tmp_path / "run"
+    code = main(["run", "--scenario", "align", "--estimator", "oracle", "--seeds", "1",
+                 "--out", str(out)])
+    assert code == 0
+    res = json.loads((out / "results.json").read_text())
+    assert res["estimator"] == "oracle" and res["availability"]["mean"] > 0.5
+    assert (out / "run.png").stat().st_size > 10_000
