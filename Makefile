@@ -17,7 +17,7 @@ $(STAMP): pyproject.toml
 	@touch $(STAMP)
 
 demo: $(STAMP)
-	MUJOCO_GL=osmesa $(BIN)/ledsim evaluate --scenario open-loop --seeds 10 --out $(OUT)
+	MUJOCO_GL=osmesa $(BIN)/ledsim demo --out $(OUT)
 
 test: $(STAMP)
 	$(BIN)/ruff check ledsim observer tests scripts

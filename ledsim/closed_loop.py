@@ -162,8 +162,13 @@ def control_law(scenario: PhysicsScenario, constants: LinkConstants):
     return Excitation()
 
 
-def run_once(cfg: RunConfig, seed: int, keep_trace: bool = False) -> dict:
-    """One closed-loop run; returns metrics (and the time series if ``keep_trace``)."""
+def run_once(cfg: RunConfig, seed: int, keep_trace: bool = False, on_step=None,
+             progress: bool = False) -> dict:
+    """One closed-loop run; returns metrics (and the time series if ``keep_trace``).
+
+    ``on_step(t, world, reading, xhat)`` is called at every control step before physics
+    advances (the renderer uses it).
+    """
     scenario = PHYSICS_SCENARIOS[cfg.scenario]
     system = GimbalSystem(cfg.world_config())
     model = identified_model(system)
@@ -199,16 +204,18 @@ def run_once(cfg: RunConfig, seed: int, keep_trace: bool = False) -> dict:
             predicted[0] = model.h(model.f(xhat, u))
         spent[0] += time.perf_counter() - t0
         xhats.append(xhat)
+        if on_step is not None:
+            on_step(t, world, reading, xhat)
         return float(system.torque_for(u))
 
     t0 = time.perf_counter()
-    res = simulate(world, sensor, scenario.seconds, disturbances=disturbances,
-                   controller=controller)
+    res = simulate(world, sensor, cfg.extra.get("seconds", scenario.seconds),
+                   disturbances=disturbances, controller=controller, progress=progress)
     wall = time.perf_counter() - t0
     xhat = np.array(xhats)
     return {"metrics": metrics(res, xhat, scenario, constants, disturbances),
             "us_per_step": 1e6 * spent[0] / len(res.t),
-            "realtime_factor": scenario.seconds / wall,
+            "realtime_factor": res.t[-1] / wall if len(res.t) else 0.0,
             "trace": {"t": res.t, "x": res.x, "xhat": xhat, "power": res.power,
                       "power_clean": res.power_clean, "torque": res.torque,
                       "occluded": res.occluded} if keep_trace else None}

@@ -29,7 +29,10 @@ class DisturbanceError(ValueError):
 
 @dataclass
 class HullVibration:
-    """Hull vibration: ``torque sin(2 pi f t)`` about z and ``force sin(2 pi f t)`` along y.
+    """Hull vibration: ``torque cos(2 pi f t)`` about z and ``force cos(2 pi f t)`` along y.
+
+    Cosine, so the hull's velocity oscillates about zero (a sine started at rest would
+    add a steady drift of force / (m 2 pi f)).
 
     Attributes:
         frequency: vibration frequency f [Hz].
@@ -42,7 +45,7 @@ class HullVibration:
     force: float = 0.0
 
     def apply(self, world: LinkWorld, t: float) -> None:
-        s = math.sin(2 * math.pi * self.frequency * t)
+        s = math.cos(2 * math.pi * self.frequency * t)
         xfrc = world.data.xfrc_applied[world.auv_id]
         xfrc[1] = self.force * s
         xfrc[5] = self.torque * s

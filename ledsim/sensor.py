@@ -80,7 +80,13 @@ class IrradianceSensor:
     def _check_line_of_sight(self) -> None:
         """Refuse geometries where the LED can never be seen (behind, or walled off)."""
         w = self.world
+        # Only the scene itself counts: park the (moving) occluder while checking.
+        occluder = w.data.mocap_pos[w.occluder_mocap].copy()
+        w.set_occluder(w.occluder_home)
+        mujoco.mj_kinematics(w.model, w.data)
         reading = self.read(noise=False)
+        w.set_occluder(occluder)
+        mujoco.mj_kinematics(w.model, w.data)
         led = w.led_pos
         for i in range(2):
             if abs(reading.incidence_angle[i]) >= math.pi / 2:

@@ -8,6 +8,8 @@ import numpy as np
 def rmse(estimate: np.ndarray, truth: np.ndarray, start: int = 0) -> np.ndarray:
     """Root-mean-square error over time (axis 0) from step ``start``, per component."""
     err = np.asarray(estimate, dtype=float)[start:] - np.asarray(truth, dtype=float)[start:]
+    if err.shape[0] == 0 or not np.isfinite(err).any():
+        return np.full(err.shape[1:], np.nan)  # empty window: undefined, not a warning
     return np.sqrt(np.nanmean(err**2, axis=0))
 
 

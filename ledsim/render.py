@@ -1,0 +1,235 @@
+"""Offscreen rendering of the link: MuJoCo frames, the LED beam, and a live overlay.
+
+``MUJOCO_GL`` must be chosen before ``mujoco`` is imported (``ledsim render`` sets it
+from ``--gl``, default ``osmesa``). What a frame shows:
+
+- the AUV, the gimbal and the transmitter in a fogged, water-tinted scene;
+- one beam per photodiode from the LED: cyan with an opacity that follows the received
+  power, cut short and turned red where a body blocks it;
+- a panel with the time, true vs estimated phi, and the two powers.
+"""
+
+from __future__ import annotations
+
+import os
+from collections import deque
+from pathlib import Path
+
+import mujoco
+import numpy as np
+from PIL import Image, ImageDraw, ImageFont
+
+from .errors import UserError
+from .sensor import SensorReading
+from .world import LinkWorld
+
+BEAM_WIDTH = 0.0012  # m, radius of the drawn beam capsules
+CLEAR = np.array([0.35, 1.0, 0.95])
+BLOCKED = np.array([1.0, 0.25, 0.15])
+
+
+class RenderError(UserError):
+    """Rendering cannot start (bad size, no OpenGL backend)."""
+
+
+def check_size(world: LinkWorld, width: int, height: int) -> None:
+    vis = world.model.vis.global_
+    for name, value, limit in (("width", width, vis.offwidth), ("height", height,
+                                                               vis.offheight)):
+        if not 0 < value <= limit:
+            raise RenderError(f"--{name} {value} is not allowed: must be in 1..{limit} "
+                              "(the scene's offscreen buffer)")
+        if value % 2:
+            raise RenderError(f"--{name} {value} is not allowed: H.264 needs an even size")
+
+
+def make_renderer(world: LinkWorld, width: int, height: int) -> mujoco.Renderer:
+    """A ``mujoco.Renderer``; a missing GL library becomes a one-line RenderError."""
+    check_size(world, width, height)
+    try:
+        renderer = mujoco.Renderer(world.model, height=height, width=width)
+    except Exception as exc:  # the GL backend failed to load or create a context
+        backend = os.environ.get("MUJOCO_GL", "default")
+        hint = ("install libosmesa6 (apt-get install libosmesa6)" if backend == "osmesa"
+                else "install libegl1 and a GPU driver, or use --gl osmesa")
+        raise RenderError(f"cannot start {backend} rendering ({type(exc).__name__}: "
+                          f"{str(exc).strip().splitlines()[0] if str(exc).strip() else ''}): "
+                          f"{hint}") from None
+    renderer.scene.flags[mujoco.mjtRndFlag.mjRND_FOG] = True
+    return renderer
+
+
+def add_beams(scene: mujoco.MjvScene, world: LinkWorld, reading: SensorReading,
+              blocked_at: list[np.ndarray | None], peak_power: float) -> None:
+    """Append one capsule per photodiode from the LED towards it (or to the blocker)."""
+    led = world.led_pos.copy()
+    for i in range(2):
+        if scene.ngeom >= scene.maxgeom:
+            return
+        end = world.photodiode_pos(i).copy() if blocked_at[i] is None else blocked_at[i]
+        level = float(np.clip(reading.power_clean[i] / peak_power, 0.0, 1.0))
+        if blocked_at[i] is None:
+            rgba = np.r_[CLEAR, 0.15 + 0.7 * level]
+        else:
+            rgba = np.r_[BLOCKED, 0.85]
+        geom = scene.geoms[scene.ngeom]
+        mujoco.mjv_initGeom(geom, mujoco.mjtGeom.mjGEOM_CAPSULE, np.zeros(3), np.zeros(3),
+                            np.eye(3).ravel(), rgba.astype(np.float32))
+        mujoco.mjv_connector(geom, mujoco.mjtGeom.mjGEOM_CAPSULE, BEAM_WIDTH, led, end)
+        geom.emission = 0.8
+        scene.ngeom += 1
+
+
+def blocking_points(world: LinkWorld, sensor) -> list[np.ndarray | None]:
+    """Where the centre ray from each photodiode to the LED is stopped (None: clear)."""
+    points = []
+    geomid = np.zeros(1, dtype=np.int32)
+    for i in range(2):
+        origin = world.photodiode_pos(i).copy()
+        vec = world.led_pos - origin
+        length = float(np.linalg.norm(vec))
+        dist = mujoco.mj_ray(world.model, world.data, origin, vec / length,
+                             sensor_groups(), 1, world.gimbal_id, geomid)
+        points.append(origin + dist * vec / length if 0 <= dist < length else None)
+    return points
+
+
+def sensor_groups() -> np.ndarray:
+    from .sensor import RAY_GROUPS
+
+    return RAY_GROUPS
+
+
+class Overlay:
+    """Panel with the time and scrolling traces of phi (true, estimated) and P1, P2."""
+
+    def __init__(self, width: int, height: int, seconds_shown: float = 5.0, fps: float = 30,
+                 label: str = ""):
+        self.w, self.h = width, height
+        self.panel_h = max(90, int(0.3 * height))
+        self.n = max(2, int(seconds_shown * fps))
+        self.phi, self.phihat, self.p1, self.p2 = (deque(maxlen=self.n) for _ in range(4))
+        self.label = label
+        size = max(10, height // 40)
+        try:
+            self.font = ImageFont.load_default(size=size)
+        except TypeError:  # Pillow < 10.1 has only the fixed bitmap font
+            self.font = ImageFont.load_default()
+
+    def push(self, phi: float, phihat: float, p1: float, p2: float) -> None:
+        for q, v in ((self.phi, phi), (self.phihat, phihat), (self.p1, p1), (self.p2, p2)):
+            q.append(v)
+
+    def draw(self, frame: np.ndarray, t: float, peak_power: float) -> np.ndarray:
+        y0 = self.h - self.panel_h
+        frame[y0:] = (frame[y0:] * 0.3).astype(np.uint8)  # darken the panel area
+        img = Image.fromarray(frame)
+        d = ImageDraw.Draw(img)
+        half = self.w // 2
+        boxes = [(8, y0 + 22, half - 8, self.h - 8), (half + 8, y0 + 22, self.w - 8, self.h - 8)]
+        for box in boxes:
+            d.rectangle(box, outline=(90, 110, 120))
+        self._trace(d, boxes[0], self.phi, (-0.5, 0.5), (255, 255, 255))
+        self._trace(d, boxes[0], self.phihat, (-0.5, 0.5), (80, 200, 255))
+        top = 1.1 * peak_power
+        self._trace(d, boxes[1], self.p1, (0.0, top), (80, 200, 255))
+        self._trace(d, boxes[1], self.p2, (0.0, top), (255, 170, 60))
+        d.text((8, y0 + 4), "phi [rad]: true (white)  estimate (blue)", fill=(230, 230, 230),
+               font=self.font)
+        d.text((half + 8, y0 + 4), "power [W]: P1 (blue)  P2 (orange)", fill=(230, 230, 230),
+               font=self.font)
+        d.text((8, 6), f"t = {t:5.2f} s   {self.label}", fill=(255, 255, 255), font=self.font)
+        return np.asarray(img)
+
+    def _trace(self, d, box, values, limits, colour) -> None:
+        if len(values) < 2:
+            return
+        x0, y0, x1, y1 = box
+        lo, hi = limits
+        v = np.clip((np.asarray(values) - lo) / (hi - lo), 0.0, 1.0)
+        xs = x1 - (len(v) - 1 - np.arange(len(v))) * (x1 - x0) / (self.n - 1)
+        ys = y1 - v * (y1 - y0)
+        d.line(list(zip(xs.tolist(), ys.tolist(), strict=True)), fill=colour, width=2)
+
+
+class VideoWriter:
+    """H.264 mp4 through imageio-ffmpeg, written to a temporary name and renamed at the
+    end: an interrupted render never leaves a partial file under the final name."""
+
+    def __init__(self, path: Path, fps: float):
+        import imageio.v2 as imageio
+
+        self.path = Path(path)
+        self.tmp = self.path.with_name(f".{self.path.name}.partial.mp4")
+        self.writer = imageio.get_writer(self.tmp, fps=fps, codec="libx264", quality=7,
+                                         macro_block_size=2, ffmpeg_log_level="error")
+        self.frames = 0
+
+    def append(self, frame: np.ndarray) -> None:
+        self.writer.append_data(frame)
+        self.frames += 1
+
+    def close(self, keep: bool = True) -> None:
+        self.writer.close()
+        if keep:
+            os.replace(self.tmp, self.path)
+        elif self.tmp.exists():
+            self.tmp.unlink()
+
+
+def peak_power(constants) -> float:
+    from .optics import photodiode_power
+
+    return float(np.max(photodiode_power(constants.distance, constants.theta,
+                                         np.linspace(-0.5, 0.5, 1001), constants)))
+
+
+class FrameRecorder:
+    """Renders frames at ``fps`` during a closed-loop run (an ``on_step`` callback)."""
+
+    def __init__(self, world: LinkWorld, sensor_like, width: int, height: int, fps: float,
+                 camera: str, writer: VideoWriter | None = None, label: str = "",
+                 keep_frames: bool = False):
+        if camera not in camera_names(world):
+            raise RenderError(f"--camera {camera!r} is not in the scene: choose from "
+                              f"{', '.join(camera_names(world))}")
+        self.world = world
+        self.sensor = sensor_like
+        self.renderer = make_renderer(world, width, height)
+        self.camera = camera
+        self.fps = fps
+        self.next_t = 0.0
+        self.writer = writer
+        self.overlay = Overlay(width, height, fps=fps, label=label)
+        self.peak = peak_power(world.config.constants)
+        self.frames: list[np.ndarray] = []
+        self.keep_frames = keep_frames
+        self.count = 0
+
+    def __call__(self, t: float, world: LinkWorld, reading: SensorReading, xhat) -> None:
+        self.overlay.push(reading.phi, float(xhat[0]), reading.power[0], reading.power[1])
+        if t + 1e-9 < self.next_t:
+            return
+        self.next_t += 1.0 / self.fps
+        frame = self.render(t, reading)
+        self.last_frame = frame
+        if self.writer is not None:
+            self.writer.append(frame)
+        if self.keep_frames:
+            self.frames.append(frame)
+        self.count += 1
+
+    def render(self, t: float, reading: SensorReading) -> np.ndarray:
+        r = self.renderer
+        r.update_scene(self.world.data, camera=self.camera)
+        add_beams(r.scene, self.world, reading, blocking_points(self.world, self.sensor),
+                  self.peak)
+        frame = r.render()
+        return self.overlay.draw(frame, t, self.peak)
+
+    def close(self) -> None:
+        self.renderer.close()
+
+
+def camera_names(world: LinkWorld) -> list[str]:
+    return [world.model.camera(i).name for i in range(world.model.ncam)]

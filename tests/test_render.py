@@ -1,0 +1,113 @@
+import subprocess
+import sys
+
+import numpy as np
+import pytest
+
+from ledsim.render import FrameRecorder, RenderError, check_size
+from ledsim.sensor import IrradianceSensor
+from ledsim.simulation import _update_kinematics
+from ledsim.world import LinkWorld
+
+HINGE = np.array([0.89, 0.0, 0.0])
+
+
+@pytest.fixture(scope="module")
+def recorder():
+    world = LinkWorld()
+    world.reset(0.1)
+    rec = FrameRecorder(world, IrradianceSensor(world), 320, 240, 30, "side")
+    yield rec
+    rec.close()
+
+
+def frame_at(rec, occluded: bool):
+    world = rec.world
+    world.set_occluder(world.link_midpoint() if occluded else world.occluder_home)
+    _update_kinematics(world)
+    reading = IrradianceSensor(world).read()
+    rec.overlay.push(reading.phi, reading.phi, *reading.power)
+    return rec.render(0.0, reading)
+
+
+def beam_pixels(frame):
+    r, g, b = (frame[..., i].astype(int) for i in range(3))
+    scene = frame[: int(0.7 * frame.shape[0])]  # above the overlay panel
+    r, g, b = (scene[..., i].astype(int) for i in range(3))
+    red = np.count_nonzero((r > 180) & (g < 120) & (b < 120))
+    cyan = np.count_nonzero((g > 180) & (b > 170) & (r < 170))
+    return red, cyan
+
+
+def test_frames_render_headless_and_are_not_blank(recorder):
+    frame = frame_at(recorder, occluded=False)
+    assert frame.shape == (240, 320, 3) and frame.dtype == np.uint8
+    assert frame.std() > 10  # not a blank or single-colour image
+    recorder.world.reset(0.4)
+    other = frame_at(recorder, occluded=False)
+    assert np.abs(other.astype(int) - frame.astype(int)).mean() > 0.5  # not constant
+
+
+def test_beam_turns_red_and_short_when_blocked(recorder):
+    recorder.world.reset(0.0)
+    red_clear, cyan_clear = beam_pixels(frame_at(recorder, occluded=False))
+    red_blocked, cyan_blocked = beam_pixels(frame_at(recorder, occluded=True))
+    assert cyan_clear > 20 and red_clear == 0
+    assert red_blocked > 5 and cyan_blocked < cyan_clear / 2
+    recorder.world.reset(0.0)
+
+
+@pytest.mark.parametrize("w,h", [(0, 240), (320, -2), (4000, 240), (321, 240)])
+def test_bad_sizes_are_refused(w, h):
+    with pytest.raises(RenderError):
+        check_size(LinkWorld(), w, h)
+
+
+def run_cli(*args):
+    return subprocess.run([sys.executable, "-m", "ledsim.cli", *args], capture_output=True,
+                          text=True, timeout=600)
+
+
+def test_render_writes_an_mp4_that_decodes_to_the_expected_frames(tmp_path):
+    import imageio.v3 as iio
+
+    out = tmp_path / "clip.mp4"
+    r = run_cli("render", "--seconds", "0.5", "--width", "160", "--height", "120",
+                "--fps", "10", "--disturbance", "occlusion:start=0.1,duration=0.2",
+                "--out", str(out))
+    assert r.returncode == 0, r.stderr
+    frames = iio.imread(out)
+    assert frames.shape == (5, 120, 160, 3)  # t = 0, 0.1, 0.2, 0.3, 0.4 s
+    assert not list(tmp_path.glob(".*partial*"))
+
+
+@pytest.mark.parametrize("args,needle", [
+    (["--width", "0"], "--width 0"),
+    (["--height", "5000"], "--height 5000"),
+    (["--fps", "0"], "--fps"),
+    (["--camera", "nope"], "nope"),
+    (["--out", "/nonexistent-dir/x.mp4"], "not writable"),
+    (["--out", "clip.gif"], ".mp4"),
+])
+def test_render_bad_input_is_one_line_exit_2(tmp_path, args, needle):
+    base = ["--seconds", "0.2", "--out", str(tmp_path / "v.mp4")]
+    r = run_cli("render", *base, *args)
+    assert r.returncode == 2, r.stderr
+    assert needle in r.stderr and len(r.stderr.strip().splitlines()) == 1
+    assert not (tmp_path / "v.mp4").exists()
+    assert not list(tmp_path.glob(".*partial*"))
+
+
+def test_missing_gl_library_names_the_fix(monkeypatch):
+    """A GL backend that cannot load (as when libOSMesa is absent) gives one clear line."""
+    import ledsim.render as render
+
+    def broken(*args, **kwargs):
+        raise ImportError("Cannot use OSMesa rendering platform. The PyOpenGL library "
+                          "could not find libOSMesa")
+
+    monkeypatch.setattr(render.mujoco, "Renderer", broken)
+    monkeypatch.setenv("MUJOCO_GL", "osmesa")
+    with pytest.raises(RenderError, match="apt-get install libosmesa6") as info:
+        render.make_renderer(LinkWorld(), 320, 240)
+    assert "\n" not in str(info.value)
