@@ -11,7 +11,6 @@ OUT     ?= out/demo
 $(STAMP): pyproject.toml
 	@bash scripts/install_system_deps.sh
 	@test -x $(BIN)/python || $(PY) -m venv $(VENV)
-	$(BIN)/pip install -q --upgrade pip
 	$(BIN)/pip install -q torch==2.13.0
 	$(BIN)/pip install -q -e '.[dev]'
 	@touch $(STAMP)

@@ -8,7 +8,7 @@ and disturbances whatever the estimator.
 ==================  ==========================================================
 scenario            what happens
 ==================  ==========================================================
-align               start misaligned (phi0 = 0.3 rad); PD control to the peak
+align               start misaligned (phi0 = 0.3 rad); PID control to the peak
 open-loop           start at phi0 = 0.3 rad; no input
 if1, if2            start aligned; the paper's input functions as u [rad/s^2]
 paper-closed-loop   start at 0.2 rad; the paper's u = -0.001 phidot_hat
@@ -32,7 +32,7 @@ from observer.baselines import ExtendedKalmanFilter, ParticleFilter, UnscentedKa
 from observer.metrics import mean_and_spread, rmse
 
 from .config import LinkConstants
-from .control import AlignmentPD, DropoutGate, Excitation, PaperRateDamping, intensity_maximum
+from .control import AlignmentPID, DropoutGate, Excitation, PaperRateDamping, intensity_maximum
 from .disturbances import DisturbanceError, parse_disturbance
 from .errors import UserError
 from .physics_system import GimbalSystem, IdentifiedGimbalModel
@@ -152,7 +152,7 @@ def identified_model(system: GimbalSystem) -> IdentifiedGimbalModel:
 
 def control_law(scenario: PhysicsScenario, constants: LinkConstants):
     if scenario.law == "pd":
-        return AlignmentPD(phi_ref=intensity_maximum(constants))
+        return AlignmentPID(phi_ref=intensity_maximum(constants), Te=constants.Te)
     if scenario.law == "paper":
         return PaperRateDamping()
     if scenario.law == "if1":
@@ -189,23 +189,27 @@ def run_once(cfg: RunConfig, seed: int, keep_trace: bool = False, on_step=None,
     xhats, spent = [], [0.0]
     if est is not None:
         est.reset()
-    # What the gate compares each sample with: the powers predicted from the last estimate.
-    predicted = [model.h(system.domain_center)]
+
+    q_hold = world.gimbal_angle
+    warmup = getattr(law, "warmup", 0.0)
+    brake = (system.inertia * 100.0, system.inertia * 20.0)  # encoder PD, 10 rad/s
 
     def controller(reading, t):
         t0 = time.perf_counter()
         if est is None:
             xhat = np.array([reading.phi, reading.phidot])
         else:
-            xhat = est.update(gate(reading.power, predicted[0]))
+            xhat = est.update(gate(reading.power))
         u = law(xhat, t)
         if est is not None:
             est.predict(u)
-            predicted[0] = model.h(model.f(xhat, u))
         spent[0] += time.perf_counter() - t0
         xhats.append(xhat)
         if on_step is not None:
             on_step(t, world, reading, xhat)
+        if t < warmup:
+            # While the estimator converges, the motor only holds its own encoder angle.
+            return -brake[0] * (world.gimbal_angle - q_hold) - brake[1] * world.gimbal_rate
         return float(system.torque_for(u))
 
     t0 = time.perf_counter()

@@ -23,20 +23,50 @@ def intensity_maximum(constants: LinkConstants) -> float:
 
 
 @dataclass
-class AlignmentPD:
-    """u = -kp (phi_hat - phi_ref) - kd phidot_hat  [rad/s^2]: drive phi to the peak.
+class AlignmentPID:
+    """Cascade alignment controller, output u [rad/s^2].
+
+    Outer loop: a rate command ``clip(-omega (phi_hat - phi_ref), +-rate_max)`` that
+    slews phi towards the intensity peak no faster than ``rate_max``, which keeps the
+    motion inside the observers' training domain (|phidot| <= 0.5 rad/s). Inner loop: PI
+    on the rate error, ``u = -kv r - ki int(r)``, ``r = phidot_hat - rate_cmd``; its
+    integral rejects steady torques such as a water current on the gimbal housing.
+    The estimate is clipped to the domain and u to +-u_max, so a wrong estimate cannot
+    spin the gimbal away; no command is given during the first ``warmup`` seconds, while
+    the estimators forget their initial guess.
 
     Attributes:
-        phi_ref: target incidence angle [rad] (default: the intensity maximum).
-        kp: position gain [1/s^2]; kd: rate gain [1/s] (critically damped at 3 rad/s).
+        phi_ref: target incidence angle [rad] (the intensity maximum).
+        omega: outer-loop bandwidth [rad/s]; rate_max: slew-rate limit [rad/s].
+        kv [1/s], ki [1/s^2]: inner PI gains; Te: control period [s].
+        u_max: command limit [rad/s^2]; i_max: clamp of the integral [rad/s];
+        warmup: time without command at the start [s].
     """
 
     phi_ref: float = 0.0
-    kp: float = 9.0
-    kd: float = 6.0
+    omega: float = 3.0
+    rate_max: float = 0.3
+    kv: float = 12.0
+    ki: float = 36.0
+    Te: float = 0.01
+    u_max: float = 200.0
+    i_max: float = 0.1
+    warmup: float = 1.0
+    domain: tuple[float, float] = (0.5, 0.5)
+
+    def __post_init__(self):
+        self.integral = 0.0
 
     def __call__(self, xhat: np.ndarray, t: float) -> float:
-        return -self.kp * (xhat[0] - self.phi_ref) - self.kd * xhat[1]
+        if t < self.warmup:  # the estimator converges; the loop holds the encoder angle
+            return 0.0
+        phi = min(max(xhat[0], -self.domain[0]), self.domain[0])
+        rate = min(max(xhat[1], -self.domain[1]), self.domain[1])
+        cmd = min(max(-self.omega * (phi - self.phi_ref), -self.rate_max), self.rate_max)
+        r = rate - cmd
+        self.integral = min(max(self.integral + r * self.Te, -self.i_max), self.i_max)
+        u = -self.kv * r - self.ki * self.integral
+        return min(max(u, -self.u_max), self.u_max)
 
 
 @dataclass
@@ -64,31 +94,45 @@ class Excitation:
 class DropoutGate:
     """Marks occluded samples as missing (NaN) before they reach any estimator.
 
-    A photodiode's sample counts as a dropout when it reads below ``floor`` W although
-    the estimate predicts more than twice that: light that should be there is gone, as
-    when a body crosses the beam. Missing samples are then handled by each estimator's
-    own policy (KKL holds its prediction; Kalman and particle filters skip the update).
-    After ``max_hold`` seconds of continuous dropouts the gate opens again, so a wrong
-    estimate cannot lock out the measurements for good.
+    A body crossing the beam cuts the light within a few milliseconds, while turning the
+    gimbal dims it smoothly. A photodiode's sample therefore counts as a dropout when it
+    falls below ``floor`` W while the recent level of that photodiode (an exponential
+    average of its accepted samples) was above twice the floor, and it stays one while
+    the power stays below the floor. Missing samples are then handled by each
+    estimator's own policy (KKL holds its prediction; Kalman and particle filters skip
+    the update). After ``max_hold`` seconds the gate gives up and passes the samples
+    again, so a lasting loss of light is seen as what it is.
+
+    The gate looks only at the measurements, so every estimator gets the same input.
 
     Args:
         constants: link constants (the floor defaults to 10% of the peak power).
         floor: power below which a sample may be a dropout [W].
-        max_hold: longest continuous dropout accepted [s].
+        max_hold: longest dropout bridged [s].
+        smoothing: weight of a new sample in the recent level.
     """
 
     def __init__(self, constants: LinkConstants, floor: float | None = None,
-                 max_hold: float = 1.0):
+                 max_hold: float = 1.0, smoothing: float = 0.2):
         peak = float(np.max(photodiode_power(
             constants.distance, constants.theta, np.linspace(-0.5, 0.5, 2001), constants)))
         self.floor = 0.1 * peak if floor is None else floor
         self.max_steps = int(round(max_hold / constants.Te))
-        self.held = np.zeros(2, dtype=int)
+        self.smoothing = smoothing
+        self.reset()
 
     def reset(self) -> None:
-        self.held[:] = 0
+        self.held = np.zeros(2, dtype=int)
+        self.level = None
 
-    def __call__(self, y: np.ndarray, predicted: np.ndarray) -> np.ndarray:
-        drop = (y < self.floor) & (predicted > 2 * self.floor) & (self.held < self.max_steps)
+    def __call__(self, y: np.ndarray) -> np.ndarray:
+        y = np.asarray(y, dtype=float)
+        if self.level is None:
+            self.level = y.copy()
+        low = y < self.floor
+        start = low & (self.held == 0) & (self.level > 2 * self.floor)
+        drop = (start | (low & (self.held > 0))) & (self.held < self.max_steps)
         self.held = np.where(drop, self.held + 1, 0)
+        a = self.smoothing
+        self.level = np.where(drop, self.level, (1 - a) * self.level + a * y)
         return np.where(drop, np.nan, y)

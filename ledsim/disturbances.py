@@ -53,13 +53,20 @@ class HullVibration:
 
 @dataclass
 class WaterCurrent:
-    """Water current through MuJoCo's medium velocity (``opt.wind``).
+    """Water current through MuJoCo's medium velocity (``opt.wind``), with the AUV
+    holding station against it.
+
+    A free-floating AUV would simply drift away with the water (0.3 m/s is 3 m in 10 s,
+    far more than the 8.5 cm link), so by default its thrusters hold the home pose with
+    a PID on position and yaw (``hold=1``); what reaches the link is the residual motion
+    the gusts leave.
 
     Attributes:
         speed: steady current speed [m/s].
         heading: direction of the current in the horizontal plane [rad] (0 = +x).
         gust: standard deviation of the gusts [m/s] (Ornstein-Uhlenbeck process).
         gust_time: correlation time of the gusts [s].
+        hold: 1 = station keeping on, 0 = drift with the water.
         seed: seed of the gusts.
     """
 
@@ -67,16 +74,34 @@ class WaterCurrent:
     heading: float = math.pi / 2
     gust: float = 0.05
     gust_time: float = 1.0
+    hold: float = 1.0
     seed: int = 0
+
+    # Station-keeping gains (N/m, N s/m, N/(m s); N m/rad, N m s/rad, N m/(rad s)).
+    KP, KD, KI = 2000.0, 500.0, 2000.0
+    KP_YAW, KD_YAW, KI_YAW = 200.0, 50.0, 200.0
 
     def __post_init__(self):
         self._rng = np.random.default_rng(self.seed)
         self._g = np.zeros(3)
         self._last_t = None
+        self._int = np.zeros(4)
+
+    def _hold(self, world: LinkWorld, dt: float) -> None:
+        err = world.hull_pos - world.initial_hull_pos
+        R = world.data.xmat[world.auv_id].reshape(3, 3)
+        yaw = math.atan2(R[1, 0], R[0, 0])
+        vel = world.body_velocity(world.auv_id)
+        self._int += dt * np.r_[err, yaw]
+        xfrc = world.data.xfrc_applied[world.auv_id]
+        xfrc[:3] = -self.KP * err - self.KD * vel[3:] - self.KI * self._int[:3]
+        xfrc[5] = -self.KP_YAW * yaw - self.KD_YAW * vel[2] - self.KI_YAW * self._int[3]
 
     def apply(self, world: LinkWorld, t: float) -> None:
         dt = 0.0 if self._last_t is None else t - self._last_t
         self._last_t = t
+        if self.hold:
+            self._hold(world, dt)
         if dt > 0 and self.gust > 0:
             a = math.exp(-dt / self.gust_time)
             self._g = a * self._g + self.gust * math.sqrt(1 - a * a) * \

@@ -182,3 +182,22 @@ def test_bad_disturbances_are_named():
         parse_disturbance("vibration:colour=3")
     with pytest.raises(DisturbanceError, match="frequency"):
         parse_disturbance("vibration:frequency=0")
+
+
+def test_scene_file_loads_as_plain_mjcf():
+    """What `python -m mujoco.viewer --mjcf assets/led_link.xml` does first."""
+    import mujoco
+
+    model = mujoco.MjModel.from_xml_path(str(SCENE))
+    assert model.nbody == 5 and model.nsite >= 3 and model.ncam == 3
+
+
+def test_knobs_reach_the_compiled_model():
+    w = LinkWorld(WorldConfig(hull_mass=40.0, water_density=1025.0, water_viscosity=0.0011,
+                              torque_limit=0.02, constants=LinkConstants(dphi=0.2)))
+    assert w.model.body_mass[w.auv_id] > 40.0  # hull geom plus fins
+    assert w.model.opt.density == 1025.0 and w.model.opt.viscosity == 0.0011
+    np.testing.assert_allclose(w.model.actuator_forcerange[w.motor_id], [-0.02, 0.02])
+    n1, n2 = w.photodiode_normal(0), w.photodiode_normal(1)
+    assert math.acos(n1 @ n2) == pytest.approx(0.2, abs=1e-12)
+    assert w.set_torque(1.0) == 0.02  # clipped at the limit
