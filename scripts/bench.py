@@ -10,6 +10,8 @@ from __future__ import annotations
 
 import argparse
 import os
+
+os.environ.setdefault("MUJOCO_GL", "osmesa")
 import platform
 import time
 from pathlib import Path
@@ -74,6 +76,49 @@ def world_speed(timestep: float, seconds: float = 20.0, repeats: int = 3) -> tup
     return steps / best, seconds / best
 
 
+def closed_loop_speed(estimator: str) -> tuple[float, float]:
+    """(real-time factor of the whole loop, estimator us per step), align scenario."""
+    from ledsim.closed_loop import RunConfig, run_once
+
+    best = None
+    for _ in range(2):
+        out = run_once(RunConfig(scenario="align", estimator=estimator), seed=0)
+        if best is None or out["realtime_factor"] > best["realtime_factor"]:
+            best = out
+    return best["realtime_factor"], best["us_per_step"]
+
+
+def render_speed(width: int = 640, height: int = 480, frames: int = 60) -> tuple[float, float]:
+    """(frames/s with beam and overlay, frames/s of the bare MuJoCo render)."""
+    from ledsim.render import FrameRecorder
+    from ledsim.sensor import IrradianceSensor
+    from ledsim.simulation import _update_kinematics
+    from ledsim.world import LinkWorld
+
+    world = LinkWorld()
+    world.reset(0.2)
+    sensor = IrradianceSensor(world)
+    rec = FrameRecorder(world, sensor, width, height, 30, "side")
+    try:
+        _update_kinematics(world)
+        reading = sensor.read()
+        for _ in range(5):
+            rec.render(0.0, reading)
+        t0 = time.perf_counter()
+        for k in range(frames):
+            rec.overlay.push(reading.phi, reading.phi, *reading.power)
+            rec.render(k / 30, reading)
+        full = frames / (time.perf_counter() - t0)
+        t0 = time.perf_counter()
+        for _ in range(frames):
+            rec.renderer.update_scene(world.data, camera="side")
+            rec.renderer.render()
+        bare = frames / (time.perf_counter() - t0)
+    finally:
+        rec.close()
+    return full, bare
+
+
 def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__)
     ap.add_argument("--quick", action="store_true", help="skip the training benchmark")
@@ -111,6 +156,17 @@ def main() -> None:
     for dt in (0.002, 0.005, 0.01):
         sps, rtf = world_speed(dt)
         lines.append(f"| {dt * 1e3:g} ms | {round(0.01 / dt)} | {sps:.3g} | {rtf:.0f}x |")
+    lines += ["", "## Closed loop in MuJoCo (align scenario, 10 s, one core)", "",
+              "| estimator | real-time factor of the loop | estimator us / step |",
+              "|---|---|---|"]
+    for est in ("kkl", "ekf", "ukf", "pf", "oracle"):
+        rtf, us = closed_loop_speed(est)
+        lines.append(f"| {est} | {rtf:.0f}x | {us:.1f} |")
+    full, bare = render_speed()
+    lines += ["", f"## Rendering ({os.environ.get('MUJOCO_GL', 'default')} backend, "
+              "640x480, side camera)", "", "| what | frames / s |", "|---|---|",
+              f"| frame with beams and overlay panel | {full:.1f} |",
+              f"| bare MuJoCo render of the same scene | {bare:.1f} |"]
     if not args.quick:
         torch.set_num_threads(2)
         design, cfg = observer_preset("default", system.Te)
