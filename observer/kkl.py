@@ -163,8 +163,9 @@ class KKLObserver(Estimator):
         z_next = self.eigenvalues * self.z + self.B @ self._y
         moved = (u != self.u_bar) if isinstance(u, float | int) else \
             np.any(np.asarray(u, dtype=float) != self.u_bar)
-        if self.omega and moved:
-            z_next = z_next + self.omega_correction(self.z[None], u, self._xhat[None])[0]
+        if self.omega and moved:  # single-sample Omega: matrix-vector products only
+            f, enc, xh = self.system.f, self.encoder_T.vector, self._xhat
+            z_next = z_next + enc(f(xh, u)) - enc(f(xh, self.u_bar))
         self.z = z_next
 
     # -- batched run over many trajectories ---------------------------------------------

@@ -138,13 +138,19 @@ def test_occlusion_disturbance_blocks_for_about_its_duration(world):
     world.reset()
 
 
-def test_transmitter_motion_and_current_move_the_link(world):
+def test_transmitter_motion_moves_the_link_and_current_moves_a_drifting_hull(world):
     world.reset()
     res = simulate(world, IrradianceSensor(world), 2.0, disturbances=[
-        parse_disturbance("transmitter:sway=0.01,frequency=1"),
-        parse_disturbance("current:speed=0.3")])
+        parse_disturbance("transmitter:sway=0.01,frequency=1")])
     assert np.ptp(res.phi) > 0.05
-    assert np.linalg.norm(res.hull_pos[-1] - res.hull_pos[0]) > 0.01
+    world.reset()
+    drift = simulate(world, IrradianceSensor(world), 2.0, disturbances=[
+        parse_disturbance("current:speed=0.3,hold=0")])
+    assert np.linalg.norm(drift.hull_pos[-1] - drift.hull_pos[0]) > 0.1
+    world.reset()
+    held = simulate(world, IrradianceSensor(world), 2.0, disturbances=[
+        parse_disturbance("current:speed=0.3")])
+    assert np.abs(held.hull_pos - held.hull_pos[0]).max() < 0.01  # station keeping
     world.reset()
 
 
