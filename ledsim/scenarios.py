@@ -19,6 +19,7 @@ from __future__ import annotations
 
 import time
 from dataclasses import dataclass
+from functools import cached_property
 
 import numpy as np
 
@@ -70,9 +71,13 @@ class Scenario:
 
     def control(self, k: int, Te: float, xhat: np.ndarray) -> float:
         """u_k [rad/s^2] from the time k Te and the current estimate."""
-        t = k * Te
-        u = self.cos_amp * np.cos(self.omega * t) + self.sin_amp * np.sin(self.omega * t)
-        return float(u - self.feedback_gain * xhat[1])
+        return float(self.excitation(xhat, k * Te) - self.feedback_gain * xhat[1])
+
+    @cached_property
+    def excitation(self):
+        from .control import Excitation
+
+        return Excitation(self.cos_amp, self.sin_amp, self.omega)
 
     @property
     def is_open_loop(self) -> bool:

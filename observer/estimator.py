@@ -51,3 +51,19 @@ class Estimator(ABC):
 def finite_mask(y: np.ndarray) -> np.ndarray:
     """Which components of ``y`` are usable measurements."""
     return np.isfinite(np.asarray(y, dtype=float))
+
+
+class GaussianFilter(Estimator):
+    """Shared state of the Kalman-type filters: mean ``x``, covariance ``P``, and the
+    noise covariances Q, R taken from the system."""
+
+    def __init__(self, system: DiscreteSystem, P0: np.ndarray | None = None):
+        super().__init__(system)
+        self.Q = np.diag(system.process_noise_std**2)
+        self.R = np.diag(system.measurement_noise_std**2)
+        self.P0 = self.initial_covariance() if P0 is None else np.asarray(P0, dtype=float)
+        self.reset()
+
+    def reset(self, x0=None) -> None:
+        self.x = self.initial_guess(x0)
+        self.P = self.P0.copy()

@@ -94,6 +94,22 @@ def stationary_noise_covariance(eigenvalues, B, R) -> np.ndarray:
     return BRB / (1.0 - np.outer(lam, lam))
 
 
+def series_encoder(system: DiscreteSystem, eigenvalues, B, x, steps: int = 3000) -> np.ndarray:
+    """T(x) = sum_j A^j B h(f^-(j+1)(x, u_bar=0)), paper eq. (equat3a), by brute force.
+
+    Needs ``system.f_inverse`` (a time-reversible closed-form model); used to check a
+    learned encoder. Truncated after ``steps`` terms (A^steps must be negligible).
+    """
+    lam = np.asarray(eigenvalues, dtype=float)
+    B = np.asarray(B, dtype=float)
+    z = np.zeros((len(x), lam.size))
+    xb = np.array(x, dtype=float)
+    for j in range(steps):
+        xb = system.f_inverse(xb)
+        z += lam**j * (system.h(xb) @ B.T)
+    return z
+
+
 class KKLObserver(Estimator):
     """Learned KKL observer with a fast numpy inference path.
 

@@ -20,20 +20,11 @@ from ledsim.paper_model import LEDLinkModel
 from ledsim.presets import DEFAULT_RATES, observer_preset
 from ledsim.scenarios import Noise, get_scenario, run
 from observer.checkpoint import atomic_write_text
-from observer.kkl import KKLDesign
+from observer.kkl import KKLDesign, series_encoder
 from observer.metrics import converged, rmse
 from observer.training import TrainingConfig, train_kkl
 
 ROOT = Path(__file__).resolve().parent.parent
-
-
-def exact_T(obs, system, x, steps=3000):
-    z = np.zeros((len(x), obs.q))
-    xb = np.array(x, dtype=float)
-    for j in range(steps):
-        xb = system.f_inverse(xb)
-        z += obs.eigenvalues**j * (system.h(xb) @ obs.B.T)
-    return z
 
 
 def variants(Te):
@@ -68,7 +59,7 @@ def main() -> None:
     for name, design, cfg in variants(system.Te):
         cfg = dataclasses.replace(cfg)
         obs, rep = train_kkl(system, design, cfg, progress=False)
-        z = exact_T(obs, system, x_test)
+        z = series_encoder(system, obs.eigenvalues, obs.B, x_test)
         rel = np.sqrt(((obs.encode(x_test) - z) ** 2).mean(0)) / z.std(0)
         errs = []
         for seed in range(10):

@@ -4,11 +4,10 @@ from __future__ import annotations
 
 import numpy as np
 
-from ..estimator import Estimator, finite_mask
-from ..system import DiscreteSystem
+from ..estimator import GaussianFilter, finite_mask
 
 
-class ExtendedKalmanFilter(Estimator):
+class ExtendedKalmanFilter(GaussianFilter):
     """EKF on the system's f and h with their Jacobians.
 
     Args:
@@ -17,17 +16,6 @@ class ExtendedKalmanFilter(Estimator):
     """
 
     name = "ekf"
-
-    def __init__(self, system: DiscreteSystem, P0: np.ndarray | None = None):
-        super().__init__(system)
-        self.Q = np.diag(system.process_noise_std**2)
-        self.R = np.diag(system.measurement_noise_std**2)
-        self.P0 = self.initial_covariance() if P0 is None else np.asarray(P0, dtype=float)
-        self.reset()
-
-    def reset(self, x0=None) -> None:
-        self.x = self.initial_guess(x0)
-        self.P = self.P0.copy()
 
     def update(self, y) -> np.ndarray:
         y = np.asarray(y, dtype=float)

@@ -4,11 +4,11 @@ from __future__ import annotations
 
 import numpy as np
 
-from ..estimator import Estimator, finite_mask
+from ..estimator import GaussianFilter, finite_mask
 from ..system import DiscreteSystem
 
 
-class UnscentedKalmanFilter(Estimator):
+class UnscentedKalmanFilter(GaussianFilter):
     """UKF (Wan & Van der Merwe 2000) on the system's f and h.
 
     Args:
@@ -21,21 +21,13 @@ class UnscentedKalmanFilter(Estimator):
 
     def __init__(self, system: DiscreteSystem, alpha: float = 0.5, beta: float = 2.0,
                  kappa: float = 1.0, P0: np.ndarray | None = None):
-        super().__init__(system)
         n = system.n_state
         self.lam = alpha**2 * (n + kappa) - n
         self.Wm = np.full(2 * n + 1, 0.5 / (n + self.lam))
         self.Wc = self.Wm.copy()
         self.Wm[0] = self.lam / (n + self.lam)
         self.Wc[0] = self.Wm[0] + 1 - alpha**2 + beta
-        self.Q = np.diag(system.process_noise_std**2)
-        self.R = np.diag(system.measurement_noise_std**2)
-        self.P0 = self.initial_covariance() if P0 is None else np.asarray(P0, dtype=float)
-        self.reset()
-
-    def reset(self, x0=None) -> None:
-        self.x = self.initial_guess(x0)
-        self.P = self.P0.copy()
+        super().__init__(system, P0)
 
     def sigma_points(self) -> np.ndarray:
         n = self.x.size
