@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import argparse
+import math
 import sys
 import time
 from pathlib import Path
@@ -42,6 +43,8 @@ def build_parser() -> argparse.ArgumentParser:
     ev.add_argument("--scenario", required=True, choices=list(SCENARIOS), metavar="SCENARIO",
                     help="one of: " + ", ".join(SCENARIOS))
     ev.add_argument("--distance", type=_float, default=0.085, help="link distance d [m]")
+    ev.add_argument("--dphi", type=_float, default=6.0,
+                    help="angle between the photodiode normals [deg]")
     ev.add_argument("--seeds", type=int, default=10, help="noise seeds (>= 1)")
     ev.add_argument("--starts", type=int, default=100,
                     help="random initial guesses for the convergence share (0 to skip)")
@@ -67,6 +70,12 @@ def build_parser() -> argparse.ArgumentParser:
                      help="name[:key=value,...] with name in vibration, current, "
                           "transmitter, occlusion (repeatable)")
     sim.add_argument("--distance", type=_float, default=0.085, help="link distance d [m]")
+    sim.add_argument("--dphi", type=_float, default=6.0,
+                     help="angle between the photodiode normals [deg]")
+    sim.add_argument("--led-yaw", type=_float, default=0.0,
+                     help="LED axis turned away from the receiver [deg]")
+    sim.add_argument("--led-offset", type=_float, default=0.0,
+                     help="LED moved across the link [m]")
     sim.add_argument("--torque-limit", type=_float, default=0.05, help="[N m]")
     sim.add_argument("--gimbal-angle", type=_float, default=0.0, help="initial angle [rad]")
     sim.add_argument("--scene", help="MJCF scene file (default: assets/led_link.xml)")
@@ -166,8 +175,10 @@ def _simulate(args) -> int:
         profile = torque_profile(args.torque_profile, args.torque_amplitude,
                                  args.torque_frequency)
         disturbances = [parse_disturbance(d) for d in args.disturbance]
-        config = WorldConfig(constants=LinkConstants(distance=args.distance),
-                             torque_limit=args.torque_limit,
+        constants = LinkConstants(distance=args.distance, dphi=math.radians(args.dphi))
+        config = WorldConfig(constants=constants, torque_limit=args.torque_limit,
+                             led_yaw=math.radians(args.led_yaw),
+                             led_lateral_offset=args.led_offset,
                              xml=Path(args.scene) if args.scene else SCENE)
         world = LinkWorld(config)
         world.reset(gimbal_angle=args.gimbal_angle)
@@ -323,7 +334,8 @@ def _render(args, still: Path | None = None) -> int:
 def _evaluate(args) -> int:
     from .evaluate import EvaluationConfig, UserError, evaluate, markdown_table, write_outputs
 
-    cfg = EvaluationConfig(scenario=args.scenario, distance=args.distance, seeds=args.seeds,
+    cfg = EvaluationConfig(scenario=args.scenario, distance=args.distance,
+                           dphi=math.radians(args.dphi), seeds=args.seeds,
                            starts=args.starts, particles=args.particles,
                            checkpoint=args.checkpoint, workers=args.workers)
     out = Path(args.out)

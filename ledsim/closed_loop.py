@@ -130,6 +130,9 @@ def build_estimator(cfg: RunConfig, system: GimbalSystem, model: IdentifiedGimba
             raise UserError(str(exc)) from None
         if cfg.omega_model == "identified":
             obs.system = model
+        elif cfg.omega_model == "simulator":
+            # Its own copy of the world: f() resets MuJoCo's state to evaluate a step.
+            obs.system = GimbalSystem(cfg.world_config())
         obs.omega = cfg.omega_model != "none"
         return obs
     if cfg.estimator == "ekf":

@@ -40,6 +40,7 @@ def default_checkpoint(distance: float, design: str = "default") -> Path:
 class EvaluationConfig:
     scenario: str = "open-loop"
     distance: float = 0.085
+    dphi: float = LinkConstants().dphi  # rad
     seeds: int = 10
     starts: int = 100  # random initial guesses for the convergence share
     particles: int = 5000
@@ -54,6 +55,9 @@ class EvaluationConfig:
             raise UserError(exc.args[0]) from None
         if not self.distance > 0:
             raise UserError(f"--distance {self.distance!r} is not allowed: must be > 0 m")
+        if self.dphi == 0:
+            raise UserError("--dphi 0 is not allowed: the two photodiodes must point in "
+                            "different directions")
         if self.seeds < 1:
             raise UserError(f"--seeds {self.seeds!r} is not allowed: must be >= 1")
         if self.starts < 0:
@@ -124,7 +128,7 @@ def evaluate(cfg: EvaluationConfig, constants: LinkConstants | None = None) -> t
     cfg.validate()
     base = constants or LinkConstants()
     try:
-        system = LEDLinkModel(base.with_(distance=cfg.distance))
+        system = LEDLinkModel(base.with_(distance=cfg.distance, dphi=cfg.dphi))
     except ValueError as exc:
         raise UserError(str(exc)) from None
     scenario = get_scenario(cfg.scenario)

@@ -17,6 +17,8 @@ def run_cli(*args):
     (["--scenario", "if1", "--distance", "0"], "--distance 0.0"),
     (["--scenario", "if1", "--distance", "-0.1"], "--distance -0.1"),
     (["--scenario", "if1", "--seeds", "0"], "--seeds 0"),
+    (["--scenario", "if1", "--dphi", "0"], "--dphi 0"),
+    (["--scenario", "if1", "--dphi", "8"], "constants.dphi"),
     (["--scenario", "if1", "--distance", "0.15"], "no shipped checkpoint"),
     (["--scenario", "if1", "--checkpoint", "missing.pt"], "does not exist"),
 ])
@@ -71,6 +73,8 @@ def test_evaluate_writes_results_table_and_figures(tmp_path, capsys):
     (["--torque-profile", "wobble"], "wobble"),
     (["--seconds", "-1"], "--seconds"),
     (["--scene", "missing.xml"], "does not exist"),
+    (["--led-yaw", "180"], "no line of sight"),
+    (["--dphi", "0"], "dphi"),
 ])
 def test_simulate_bad_input_is_one_line_exit_2(tmp_path, args, needle):
     out = tmp_path / "sim"

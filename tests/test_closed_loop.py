@@ -58,3 +58,11 @@ def test_kkl_rides_through_an_occlusion():
     during = (tr["t"] >= 4.0) & (tr["t"] < 4.5)
     assert np.abs(tr["xhat"][during, 0] - tr["x"][during, 0]).max() < 0.05
     assert out["metrics"]["recovery_time"] is not None
+
+
+def test_omega_from_the_simulator_does_not_disturb_the_simulated_world():
+    runs = {m: run_once(RunConfig(scenario="align", estimator="kkl", omega_model=m,
+                                  extra={"seconds": 2.0}), seed=3, keep_trace=True)
+            for m in ("identified", "simulator")}
+    a, b = (runs[m]["trace"]["x"] for m in ("identified", "simulator"))
+    assert np.abs(a - b)[:, 0].max() < 0.01
