@@ -25,6 +25,9 @@ test: $(STAMP)
 bench: $(STAMP)
 	MUJOCO_GL=osmesa $(BIN)/python scripts/bench.py
 
+lint: $(STAMP)
+	$(BIN)/ruff check ledsim observer tests scripts
+
 tables: $(STAMP)
 	$(BIN)/python scripts/tables.py table1
 	$(BIN)/python scripts/tables.py table2
