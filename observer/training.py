@@ -194,8 +194,13 @@ def train_kkl(system: DiscreteSystem, design: KKLDesign, config: TrainingConfig 
     torch.set_num_threads(cfg.threads)
     gen = torch.Generator().manual_seed(cfg.seed)
     rng = np.random.default_rng(cfg.seed)
+    stages = tqdm(total=3, desc="Algorithm 1", disable=not progress, leave=False,
+                  bar_format="{desc}: {n}/{total} {postfix}")
+    stages.set_postfix_str("transitions")
     if data is None:
         data = transitions(system, cfg.n_samples, cfg.u_bar, rng, cfg.horizon)
+    stages.update()
+    stages.set_postfix_str("encoder T (L_dyn)")
     x_np, xk_np, ys_np = (np.asarray(a, dtype=np.float64) for a in data)
     if ys_np.ndim == 2:
         ys_np = ys_np[None]
@@ -235,6 +240,8 @@ def train_kkl(system: DiscreteSystem, design: KKLDesign, config: TrainingConfig 
     else:
         with torch.no_grad():
             res = (encoder(XK) - (A_t * encoder(X) + S)).double().numpy()
+    stages.update()
+    stages.set_postfix_str("decoder T* (L_recon)")
 
     # 2. Rescale z for good: z~ = z / D(z), B~ = B / D(z).
     with torch.no_grad():
@@ -272,6 +279,8 @@ def train_kkl(system: DiscreteSystem, design: KKLDesign, config: TrainingConfig 
         err = (decoder(Zin_t).double().numpy() - x_np) / half
     report.loss_recon = float((err**2).sum(axis=1).mean())
 
+    stages.update()
+    stages.close()
     enc_np = encoder.export().scaled_output(1.0 / spread)
     dec_np = decoder.export()
     report.seconds = time.perf_counter() - t0
