@@ -35,6 +35,7 @@ from .config import LinkConstants
 from .control import AlignmentPID, DropoutGate, Excitation, PaperRateDamping, intensity_maximum
 from .disturbances import DisturbanceError, parse_disturbance
 from .errors import UserError
+from .optics import peak_power
 from .physics_system import GimbalSystem, IdentifiedGimbalModel
 from .sensor import IrradianceSensor
 from .simulation import simulate
@@ -236,7 +237,7 @@ def metrics(res, xhat, scenario, constants, disturbances) -> dict:
     es = rmse(xhat, res.x, start)
     phi_ref = intensity_maximum(constants)
     aligned = np.abs(res.phi - phi_ref) < ALIGN_TOLERANCE
-    p_max = float(np.max(photodiode_power_curve(constants)))
+    p_max = peak_power(constants)
     p1 = res.power_clean[:, 0]
     out = {"rmse": {"x1": float(e[0]), "x2": float(e[1])},
            "rmse_steady": {"x1": float(es[0]), "x2": float(es[1])},
@@ -250,13 +251,6 @@ def metrics(res, xhat, scenario, constants, disturbances) -> dict:
         rec = first_settled(aligned[end:], Te)
         out["recovery_time"] = rec
     return out
-
-
-def photodiode_power_curve(constants: LinkConstants) -> np.ndarray:
-    from .optics import photodiode_power
-
-    return photodiode_power(constants.distance, constants.theta,
-                            np.linspace(-0.5, 0.5, 2001), constants)
 
 
 def first_settled(flags: np.ndarray, Te: float, hold: float = 0.5) -> float | None:

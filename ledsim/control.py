@@ -13,7 +13,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from .config import LinkConstants
-from .optics import photodiode_power, receiver_response
+from .optics import peak_power, receiver_response
 
 
 def intensity_maximum(constants: LinkConstants) -> float:
@@ -114,9 +114,7 @@ class DropoutGate:
 
     def __init__(self, constants: LinkConstants, floor: float | None = None,
                  max_hold: float = 1.0, smoothing: float = 0.2):
-        peak = float(np.max(photodiode_power(
-            constants.distance, constants.theta, np.linspace(-0.5, 0.5, 2001), constants)))
-        self.floor = 0.1 * peak if floor is None else floor
+        self.floor = 0.1 * peak_power(constants) if floor is None else floor
         self.max_steps = int(round(max_hold / constants.Te))
         self.smoothing = smoothing
         self.reset()

@@ -23,7 +23,7 @@ from observer.metrics import converged, mean_and_spread, rmse
 from .config import LinkConstants
 from .errors import UserError
 from .paper_model import LEDLinkModel
-from .scenarios import PAPER_TABLE1, PAPER_TABLE2, Noise, Scenario, get_scenario, run
+from .scenarios import PAPER_TABLE1, PAPER_TABLE2, Noise, get_scenario, run
 
 ASSETS = Path(__file__).resolve().parent.parent / "assets"
 CHECKPOINT_DIR = ASSETS / "checkpoints"
@@ -259,8 +259,3 @@ def write_outputs(results: dict, traces: dict, out_dir: Path, Te: float) -> list
     checkpoint.atomic_write_text(out_dir / "table.md", markdown_table(results))
     checkpoint.atomic_write_text(out_dir / "results.json", json.dumps(results, indent=2) + "\n")
     return [out_dir / "results.json", out_dir / "table.md", *paths]
-
-
-def scenario_summary(scenario: Scenario) -> str:
-    return (f"{scenario.name}: x0={scenario.x0}, {scenario.n_steps} steps, "
-            f"steady from {scenario.steady_from}")

@@ -20,7 +20,8 @@ import numpy as np
 from PIL import Image, ImageDraw, ImageFont
 
 from .errors import UserError
-from .sensor import SensorReading
+from .optics import peak_power
+from .sensor import RAY_GROUPS, SensorReading
 from .world import LinkWorld
 
 BEAM_WIDTH = 0.0012  # m, radius of the drawn beam capsules
@@ -89,15 +90,9 @@ def blocking_points(world: LinkWorld, sensor) -> list[np.ndarray | None]:
         vec = world.led_pos - origin
         length = float(np.linalg.norm(vec))
         dist = mujoco.mj_ray(world.model, world.data, origin, vec / length,
-                             sensor_groups(), 1, world.gimbal_id, geomid)
+                             RAY_GROUPS, 1, world.gimbal_id, geomid)
         points.append(origin + dist * vec / length if 0 <= dist < length else None)
     return points
-
-
-def sensor_groups() -> np.ndarray:
-    from .sensor import RAY_GROUPS
-
-    return RAY_GROUPS
 
 
 class Overlay:
@@ -175,13 +170,6 @@ class VideoWriter:
             os.replace(self.tmp, self.path)
         elif self.tmp.exists():
             self.tmp.unlink()
-
-
-def peak_power(constants) -> float:
-    from .optics import photodiode_power
-
-    return float(np.max(photodiode_power(constants.distance, constants.theta,
-                                         np.linspace(-0.5, 0.5, 1001), constants)))
 
 
 class FrameRecorder:
