@@ -54,7 +54,8 @@ def build_parser() -> argparse.ArgumentParser:
     ev.add_argument("--out", required=True, help="output folder")
 
     tr = sub.add_parser("train", help="learn a KKL observer (Algorithm 1) and save it")
-    tr.add_argument("--design", choices=["default", "paper"], default="default")
+    tr.add_argument("--design", choices=["auto", "default", "low-light", "paper"],
+                    default="auto", help="auto: low-light when the link is weak")
     tr.add_argument("--distance", type=_float, default=0.085, help="link distance d [m]")
     tr.add_argument("--samples", type=_positive_int, default=200_000)
     tr.add_argument("--seed", type=int, default=0)
@@ -356,18 +357,19 @@ def _train(args) -> int:
     from .config import LinkConstants
     from .errors import UserError
     from .paper_model import LEDLinkModel
-    from .presets import observer_preset
+    from .presets import observer_preset, preset_for
 
     try:
         system = LEDLinkModel(LinkConstants(distance=args.distance))
     except ValueError as exc:
         raise UserError(str(exc)) from None
-    design, config = observer_preset(args.design, system.Te)
+    name = preset_for(system.constants) if args.design == "auto" else args.design
+    design, config = observer_preset(name, system.Te)
     config.n_samples = args.samples
     config.seed = args.seed
     obs, report = train_kkl(system, design, config)
     path = checkpoint.save(obs, args.out)
-    print(f"trained {args.design} observer in {report.seconds:.1f} s: L_dyn={report.loss_dyn:.2e}"
+    print(f"trained {name} observer in {report.seconds:.1f} s: L_dyn={report.loss_dyn:.2e}"
           f", L_recon={report.loss_recon:.2e}; wrote {path}")
     return 0
 
