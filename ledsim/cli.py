@@ -54,8 +54,7 @@ def build_parser() -> argparse.ArgumentParser:
     ev.add_argument("--out", required=True, help="output folder")
 
     tr = sub.add_parser("train", help="learn a KKL observer (Algorithm 1) and save it")
-    tr.add_argument("--design", choices=["auto", "default", "low-light", "paper"],
-                    default="auto", help="auto: low-light when the link is weak")
+    tr.add_argument("--design", choices=["default", "low-light", "paper"], default="default")
     tr.add_argument("--distance", type=_float, default=0.085, help="link distance d [m]")
     tr.add_argument("--samples", type=_positive_int, default=200_000)
     tr.add_argument("--seed", type=int, default=0)
@@ -357,13 +356,13 @@ def _train(args) -> int:
     from .config import LinkConstants
     from .errors import UserError
     from .paper_model import LEDLinkModel
-    from .presets import observer_preset, preset_for
+    from .presets import observer_preset
 
     try:
         system = LEDLinkModel(LinkConstants(distance=args.distance))
     except ValueError as exc:
         raise UserError(str(exc)) from None
-    name = preset_for(system.constants) if args.design == "auto" else args.design
+    name = args.design
     design, config = observer_preset(name, system.Te)
     config.n_samples = args.samples
     config.seed = args.seed

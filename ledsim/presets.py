@@ -11,27 +11,16 @@ from observer.training import TrainingConfig
 #: Filter rates r of the default design: eigenvalues 1 - Te r per photodiode. The
 #: paper's slowest rate (r = 1, eigenvalue 0.99) makes T too hard to learn precisely.
 DEFAULT_RATES = (2.0, 4.0, 6.0, 8.0, 10.0)
-#: Low light: longer memory (slowest eigenvalue 0.997) and wider maps.
+#: Low light (optional): longer memory (slowest eigenvalue 0.997) and wider maps.
 LOW_LIGHT_RATES = (0.3, 0.6, 1.2, 2.5, 5.0, 10.0)
-#: Below this peak-power / noise-std ratio the shipped observers use the low-light preset.
-LOW_LIGHT_SNR = 10.0
-
-
-def preset_for(constants) -> str:
-    """``"low-light"`` when the peak power is under 10 noise standard deviations
-    (d = 0.2 m with the default constants: 5.9), else ``"default"``."""
-    from .optics import peak_power
-
-    snr = peak_power(constants) / constants.measurement_noise_std
-    return "low-light" if snr < LOW_LIGHT_SNR else "default"
 
 
 def observer_preset(name: str, Te: float) -> tuple[KKLDesign, TrainingConfig]:
     """``"paper"``: A, B and training as written in the paper (Adam on L_dyn, then on
     L_recon, noise-free z). ``"default"``: y1 and y2 filtered separately, exact
     least-squares output layers, and a decoder trained on the z noise it will see.
-    ``"low-light"``: the default with slower filters and 1000-unit maps, for weak links
-    (``preset_for``)."""
+    ``"low-light"``: the default with slower filters and 1000-unit maps: lower RMSE on
+    weak links, but slower to forget its initial guess (``docs/observer.md``)."""
     if name == "paper":
         return KKLDesign.paper(Te), TrainingConfig(
             output_solve=False, encoder_epochs=30, decoder_epochs=30, decoder_noise="none")

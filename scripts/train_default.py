@@ -1,6 +1,5 @@
-"""Train the shipped observers (for each Table 2 distance the default design, or the
-low-light one where the link is weak; the paper design at d = 0.085 m) into
-assets/checkpoints. Fixed seeds; 15-60 s per observer on 2 cores."""
+"""Train the shipped observers (default design for each Table 2 distance, paper design at
+d = 0.085 m) into assets/checkpoints. Fixed seeds; about 15 s per observer on 2 cores."""
 
 from __future__ import annotations
 
@@ -9,7 +8,7 @@ import argparse
 from ledsim.config import LinkConstants
 from ledsim.evaluate import default_checkpoint
 from ledsim.paper_model import LEDLinkModel
-from ledsim.presets import observer_preset, preset_for
+from ledsim.presets import observer_preset
 from observer import checkpoint
 from observer.training import train_kkl
 
@@ -19,15 +18,14 @@ def main() -> None:
     ap.add_argument("--distances", type=float, nargs="+", default=[0.085, 0.1, 0.2])
     ap.add_argument("--no-paper", action="store_true", help="skip the paper-design observer")
     args = ap.parse_args()
-    jobs = [(preset_for(LinkConstants(distance=d)), d) for d in args.distances]
+    jobs = [("default", d) for d in args.distances]
     if not args.no_paper:
         jobs.append(("paper", 0.085))
     for design_name, d in jobs:
         system = LEDLinkModel(LinkConstants(distance=d))
         design, cfg = observer_preset(design_name, system.Te)
         obs, rep = train_kkl(system, design, cfg)
-        path = checkpoint.save(obs, default_checkpoint(d, "paper" if design_name == "paper"
-                                                       else "default"))
+        path = checkpoint.save(obs, default_checkpoint(d, design_name))
         print(f"{design_name:8s} d={d:<6g} {rep.seconds:6.1f} s  L_dyn={rep.loss_dyn:.2e} "
               f"L_recon={rep.loss_recon:.2e} -> {path}")
 

@@ -25,9 +25,8 @@ def main() -> None:
     args = ap.parse_args()
     for d in args.distances:
         system = GimbalSystem(WorldConfig(constants=LinkConstants(distance=d)))
-        # Always the default preset: the low-light filters need > 3 s to forget their
-        # initial guess, and in the closed loop that lost the link (availability 0.11
-        # against 0.67 at d = 0.2 m; docs/physics.md).
+        # The default preset also at d = 0.2: the low-light one lost the link in the
+        # closed loop (availability 0.11 against 0.67; docs/physics.md).
         design, cfg = observer_preset("default", system.Te)
         cfg.n_samples = args.samples
         import numpy as np
