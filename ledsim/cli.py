@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import argparse
 import math
+import os
 import sys
 import time
 from pathlib import Path
@@ -148,16 +149,27 @@ def main(argv: list[str] | None = None) -> int:
     return 0
 
 
-def _writable_dir(path: str) -> Path:
+def _check_out_dir(path: str) -> Path:
+    """Refuse an --out that exists as a file, before any work is done."""
     from .errors import UserError
 
     out = Path(path)
     if out.exists() and not out.is_dir():
         raise UserError(f"--out {path!r} exists and is not a folder")
+    return out
+
+
+def _writable_dir(path: str) -> Path:
+    """The --out folder, created if needed and checked writable."""
+    from .errors import UserError
+
+    out = _check_out_dir(path)
     try:
         out.mkdir(parents=True, exist_ok=True)
     except OSError as exc:
         raise UserError(f"--out {path!r} cannot be created: {exc.strerror}") from None
+    if not os.access(out, os.W_OK):
+        raise UserError(f"--out {path!r} is not writable")
     return out
 
 
@@ -211,9 +223,7 @@ def _run(args) -> int:
                     torque_limit=args.torque_limit, noise_scale=args.noise_scale,
                     seeds=args.seeds, particles=args.particles, checkpoint=args.checkpoint,
                     omega_model=args.omega_model, workers=args.workers)
-    out = Path(args.out)
-    if out.exists() and not out.is_dir():
-        raise UserError(f"--out {args.out!r} exists and is not a folder")
+    _check_out_dir(args.out)
     try:
         summary, trace = run_many(cfg)
     except (WorldError, ConfigError) as exc:
@@ -288,25 +298,23 @@ def _render(args, still: Path | None = None) -> int:
         raise UserError(f"--out {args.out!r}: folder {str(out.parent)!r} does not exist or "
                         "is not writable")
     from .closed_loop import RunConfig, run_once
-    from .physics_system import GimbalSystem
     from .render import FrameRecorder, VideoWriter
-    from .sensor import IrradianceSensor
+    from .world import LinkWorld
 
     cfg = RunConfig(scenario=args.scenario, estimator=args.estimator,
                     disturbances=tuple(args.disturbance), distance=args.distance,
                     extra={"seconds": args.seconds})
     cfg.validate()
-    world = GimbalSystem(cfg.world_config()).world  # for the size/camera/GL checks
-    recorder = FrameRecorder(world, IrradianceSensor(world), args.width, args.height,
-                             args.fps, args.camera)
-    recorder.close()
+    # Size, camera and GL backend are checked before any physics runs.
+    FrameRecorder(LinkWorld(cfg.world_config()), args.width, args.height, args.fps,
+                  args.camera).close()
     writer = VideoWriter(out, args.fps)
     state = {}
 
     def on_step(t, w, reading, xhat):
         if "rec" not in state:
             state["rec"] = FrameRecorder(
-                w, None, args.width, args.height, args.fps, args.camera, writer,
+                w, args.width, args.height, args.fps, args.camera, writer,
                 label=f"{args.scenario} | {args.estimator} | "
                       f"{', '.join(args.disturbance) or 'no disturbance'}")
         state["rec"](t, w, reading, xhat)
@@ -332,18 +340,16 @@ def _render(args, still: Path | None = None) -> int:
 
 
 def _evaluate(args) -> int:
-    from .evaluate import EvaluationConfig, UserError, evaluate, markdown_table, write_outputs
+    from .evaluate import EvaluationConfig, evaluate, markdown_table, write_outputs
 
     cfg = EvaluationConfig(scenario=args.scenario, distance=args.distance,
                            dphi=math.radians(args.dphi), seeds=args.seeds,
                            starts=args.starts, particles=args.particles,
                            checkpoint=args.checkpoint, workers=args.workers)
-    out = Path(args.out)
-    if out.exists() and not out.is_dir():
-        raise UserError(f"--out {args.out!r} exists and is not a folder")
+    _check_out_dir(args.out)
     t0 = time.perf_counter()
     results, traces = evaluate(cfg)
-    paths = write_outputs(results, traces, out, results["Te"])
+    paths = write_outputs(results, traces, _writable_dir(args.out), results["Te"])
     print(markdown_table(results))
     print(f"wrote {', '.join(str(p) for p in paths)} in {time.perf_counter() - t0:.0f} s")
     return 0

@@ -7,7 +7,6 @@ same measurement sequences). Monte-Carlo runs are spread over worker processes.
 from __future__ import annotations
 
 import json
-import os
 from concurrent.futures import ProcessPoolExecutor
 from dataclasses import dataclass
 from pathlib import Path
@@ -249,12 +248,7 @@ def _save_fig(fig, path: Path) -> None:
 def write_outputs(results: dict, traces: dict, out_dir: Path, Te: float) -> list[Path]:
     """results.json, table.md and figures; each written atomically."""
     out_dir = Path(out_dir)
-    try:
-        out_dir.mkdir(parents=True, exist_ok=True)
-    except OSError as exc:
-        raise UserError(f"--out {str(out_dir)!r} cannot be created: {exc.strerror}") from None
-    if not os.access(out_dir, os.W_OK):
-        raise UserError(f"--out {str(out_dir)!r} is not writable")
+    out_dir.mkdir(parents=True, exist_ok=True)
     paths = plot(results, traces, out_dir, Te)
     checkpoint.atomic_write_text(out_dir / "table.md", markdown_table(results))
     checkpoint.atomic_write_text(out_dir / "results.json", json.dumps(results, indent=2) + "\n")

@@ -81,7 +81,7 @@ def add_beams(scene: mujoco.MjvScene, world: LinkWorld, reading: SensorReading,
         scene.ngeom += 1
 
 
-def blocking_points(world: LinkWorld, sensor) -> list[np.ndarray | None]:
+def blocking_points(world: LinkWorld) -> list[np.ndarray | None]:
     """Where the centre ray from each photodiode to the LED is stopped (None: clear)."""
     points = []
     geomid = np.zeros(1, dtype=np.int32)
@@ -175,14 +175,13 @@ class VideoWriter:
 class FrameRecorder:
     """Renders frames at ``fps`` during a closed-loop run (an ``on_step`` callback)."""
 
-    def __init__(self, world: LinkWorld, sensor_like, width: int, height: int, fps: float,
+    def __init__(self, world: LinkWorld, width: int, height: int, fps: float,
                  camera: str, writer: VideoWriter | None = None, label: str = "",
                  keep_frames: bool = False):
         if camera not in camera_names(world):
             raise RenderError(f"--camera {camera!r} is not in the scene: choose from "
                               f"{', '.join(camera_names(world))}")
         self.world = world
-        self.sensor = sensor_like
         self.renderer = make_renderer(world, width, height)
         self.camera = camera
         self.fps = fps
@@ -210,7 +209,7 @@ class FrameRecorder:
     def render(self, t: float, reading: SensorReading) -> np.ndarray:
         r = self.renderer
         r.update_scene(self.world.data, camera=self.camera)
-        add_beams(r.scene, self.world, reading, blocking_points(self.world, self.sensor),
+        add_beams(r.scene, self.world, reading, blocking_points(self.world),
                   self.peak)
         frame = r.render()
         return self.overlay.draw(frame, t, self.peak)

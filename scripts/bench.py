@@ -98,7 +98,7 @@ def render_speed(width: int = 640, height: int = 480, frames: int = 60) -> tuple
     world = LinkWorld()
     world.reset(0.2)
     sensor = IrradianceSensor(world)
-    rec = FrameRecorder(world, sensor, width, height, 30, "side")
+    rec = FrameRecorder(world, width, height, 30, "side")
     try:
         _update_kinematics(world)
         reading = sensor.read()

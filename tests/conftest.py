@@ -1,4 +1,6 @@
 import os
+import subprocess
+import sys
 
 os.environ.setdefault("MUJOCO_GL", "osmesa")
 
@@ -7,6 +9,12 @@ import pytest  # noqa: E402
 
 from ledsim.config import LinkConstants  # noqa: E402
 from ledsim.paper_model import LEDLinkModel  # noqa: E402
+
+
+def run_cli(*args):
+    """Run ``python -m ledsim.cli ARGS`` as a user would; returns the CompletedProcess."""
+    return subprocess.run([sys.executable, "-m", "ledsim.cli", *args], capture_output=True,
+                          text=True, timeout=600)
 
 
 @pytest.fixture(scope="session")

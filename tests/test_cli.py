@@ -1,15 +1,9 @@
 import json
-import subprocess
-import sys
 
 import pytest
+from conftest import run_cli
 
 from ledsim.cli import main
-
-
-def run_cli(*args):
-    return subprocess.run([sys.executable, "-m", "ledsim.cli", *args], capture_output=True,
-                          text=True, timeout=600)
 
 
 @pytest.mark.parametrize("args,needle", [

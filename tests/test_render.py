@@ -1,8 +1,7 @@
-import subprocess
-import sys
 
 import numpy as np
 import pytest
+from conftest import run_cli
 
 from ledsim.render import FrameRecorder, RenderError, check_size
 from ledsim.sensor import IrradianceSensor
@@ -16,7 +15,7 @@ HINGE = np.array([0.89, 0.0, 0.0])
 def recorder():
     world = LinkWorld()
     world.reset(0.1)
-    rec = FrameRecorder(world, IrradianceSensor(world), 320, 240, 30, "side")
+    rec = FrameRecorder(world, 320, 240, 30, "side")
     yield rec
     rec.close()
 
@@ -61,11 +60,6 @@ def test_beam_turns_red_and_short_when_blocked(recorder):
 def test_bad_sizes_are_refused(w, h):
     with pytest.raises(RenderError):
         check_size(LinkWorld(), w, h)
-
-
-def run_cli(*args):
-    return subprocess.run([sys.executable, "-m", "ledsim.cli", *args], capture_output=True,
-                          text=True, timeout=600)
 
 
 def test_render_writes_an_mp4_that_decodes_to_the_expected_frames(tmp_path):
