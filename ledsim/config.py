@@ -12,8 +12,10 @@ from __future__ import annotations
 import math
 from dataclasses import asdict, dataclass, field, replace
 
+from .errors import LedsimError
 
-class ConfigError(ValueError):
+
+class ConfigError(LedsimError):
     """A user-supplied constant is out of its allowed range."""
 
 

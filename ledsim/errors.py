@@ -1,5 +1,16 @@
-"""Errors that mean "the user asked for something invalid": one line, exit code 2."""
+"""One error base for everything a user can get wrong.
+
+:class:`LedsimError` means "the request cannot be carried out as asked" (a bad number, a
+missing scene, a checkpoint for another link). The CLI catches it in one place and prints
+one line with exit code 2; library users catch it (or :class:`ValueError`, which it also
+is) the same way. Each part of the package raises its own subclass so a message can say
+where it came from.
+"""
 
 
-class UserError(Exception):
-    """Bad user input, reported by the CLI as one line with exit code 2."""
+class LedsimError(ValueError):
+    """Bad user input or an unusable file, reported by the CLI as one line, exit code 2."""
+
+
+#: Former name, kept so older scripts keep working.
+UserError = LedsimError

@@ -1,6 +1,10 @@
 """LED link optics: paper eqs. (pow-d-theta-phi) and (modified-gaussian2).
 
+    P = a exp(-b d) / d^2 * I~(theta) * g(phi)        (transmitter gain x receiver response)
+
 All angles in rad, distances in m, powers in W. Functions broadcast over arrays.
+:func:`received_power` is the one place the product is formed: the ray sensor, the
+simulation's noise-free series and every observer model's ``h`` go through it.
 """
 
 from __future__ import annotations
@@ -37,9 +41,40 @@ def transmitter_gain(d, theta, c: LinkConstants) -> np.ndarray:
     return c.power_scale * np.exp(-c.attenuation * d) / d**2 * led_intensity(theta, c)
 
 
-def photodiode_power(d, theta, incidence_angle, c: LinkConstants) -> np.ndarray:
+def received_power(gain, incidence_angle, r: ReceiverResponse, visible=1.0) -> np.ndarray:
+    """P = visible x gain x g(phi) [W].
+
+    Args:
+        gain: transmitter gain a exp(-b d) I~(theta) / d^2 [W] (:func:`transmitter_gain`).
+        incidence_angle: phi [rad].
+        r: the photodiode response g.
+        visible: share of the LED aperture the photodiode sees (ray-traced) [-].
+    """
+    return visible * gain * receiver_response(incidence_angle, r)
+
+
+def photodiode_power(d, theta, incidence_angle, c: LinkConstants, visible=1.0) -> np.ndarray:
     """Received optical power P_d(d, theta, phi) [W], eq. (pow-d-theta-phi)."""
-    return transmitter_gain(d, theta, c) * receiver_response(incidence_angle, c.receiver)
+    return received_power(transmitter_gain(d, theta, c), incidence_angle, c.receiver, visible)
+
+
+def pair_power(gain, phi, c: LinkConstants) -> np.ndarray:
+    """Outputs of the two photodiodes, eq. (eq-4a): gain x [g(phi), g(phi + dphi)] [W].
+
+    ``phi`` [rad] has any shape; the result has one more axis of length 2.
+    """
+    phi = np.asarray(phi, dtype=float)
+    return np.stack([received_power(gain, phi, c.receiver),
+                     received_power(gain, phi + c.dphi, c.receiver)], axis=-1)
+
+
+def pair_power_jacobian(gain, phi, c: LinkConstants) -> np.ndarray:
+    """d(pair_power)/d(phi, phidot), shape ``phi.shape + (2, 2)`` [W/rad, W s/rad]."""
+    phi = np.asarray(phi, dtype=float)
+    jac = np.zeros(np.shape(phi) + (2, 2))
+    jac[..., 0, 0] = gain * receiver_response_derivative(phi, c.receiver)
+    jac[..., 1, 0] = gain * receiver_response_derivative(phi + c.dphi, c.receiver)
+    return jac
 
 
 def peak_power(c: LinkConstants) -> float:

@@ -8,6 +8,11 @@ from __future__ import annotations
 from observer.kkl import KKLDesign
 from observer.training import TrainingConfig
 
+from .errors import LedsimError
+
+#: Names accepted by :func:`observer_preset` (``ledsim train --design``).
+PRESETS = ("default", "low-light", "paper")
+
 #: Filter rates r of the default design: eigenvalues 1 - Te r per photodiode. The
 #: paper's slowest rate (r = 1, eigenvalue 0.99) makes T too hard to learn precisely.
 DEFAULT_RATES = (2.0, 4.0, 6.0, 8.0, 10.0)
@@ -30,5 +35,4 @@ def observer_preset(name: str, Te: float) -> tuple[KKLDesign, TrainingConfig]:
     if name == "low-light":
         return KKLDesign.split(Te, LOW_LIGHT_RATES, name="low-light"), TrainingConfig(
             hidden=1000, decoder_hidden=1000, decoder_feature_scale=2.0)
-    raise ValueError(f"unknown observer preset {name!r}: use 'default', 'low-light' or "
-                     "'paper'")
+    raise LedsimError(f"unknown observer preset {name!r}: choose one of {', '.join(PRESETS)}")

@@ -10,13 +10,12 @@ from __future__ import annotations
 
 import json
 import math
-import os
-import tempfile
 from pathlib import Path
 
 import numpy as np
-import torch
 
+from .atomic import atomic_write_bytes, atomic_write_text
+from .errors import ObserverError
 from .kkl import KKLObserver
 from .nets import NumpyMLP
 from .system import DiscreteSystem
@@ -24,30 +23,8 @@ from .system import DiscreteSystem
 FORMAT = "ledsim-kkl/1"
 
 
-class CheckpointError(ValueError):
+class CheckpointError(ObserverError):
     """A checkpoint is missing, corrupt, or was trained for another system."""
-
-
-def atomic_write_bytes(path: Path, write) -> None:
-    """Call ``write(tmp_path)`` then rename over ``path``: never a half-written file."""
-    path = Path(path)
-    path.parent.mkdir(parents=True, exist_ok=True)
-    fd, tmp = tempfile.mkstemp(dir=path.parent, prefix=f".{path.name}.", suffix=".tmp")
-    os.close(fd)
-    umask = os.umask(0)
-    os.umask(umask)
-    try:
-        write(tmp)
-        os.chmod(tmp, 0o666 & ~umask)  # mkstemp makes 0600; give the usual file mode
-        os.replace(tmp, path)
-    except BaseException:
-        if os.path.exists(tmp):
-            os.unlink(tmp)
-        raise
-
-
-def atomic_write_text(path: Path, text: str) -> None:
-    atomic_write_bytes(path, lambda tmp: Path(tmp).write_text(text))
 
 
 def save(obs: KKLObserver, path: str | Path, extra: dict | None = None) -> Path:
@@ -62,8 +39,12 @@ def save(obs: KKLObserver, path: str | Path, extra: dict | None = None) -> Path:
         **getattr(obs, "training_metadata", {}),
         **(extra or {}),
     }
-    tensors = {**obs.encoder_T.to_tensors("encoder_T"),
-               **obs.decoder_T_star.to_tensors("decoder_T_star")}
+    import torch
+
+    tensors = {f"{prefix}.{k}": torch.from_numpy(np.ascontiguousarray(a))
+               for prefix, net in (("encoder_T", obs.encoder_T),
+                                   ("decoder_T_star", obs.decoder_T_star))
+               for k, a in net.arrays().items()}
     payload = {"format": FORMAT, "metadata_json": json.dumps(meta), **tensors}
     atomic_write_bytes(path, lambda tmp: torch.save(payload, tmp))
     atomic_write_text(path.with_suffix(".json"), json.dumps(meta, indent=2) + "\n")
@@ -75,11 +56,14 @@ def load(path: str | Path, system: DiscreteSystem, check: bool = True) -> KKLObs
     path = Path(path)
     if not path.is_file():
         raise CheckpointError(f"checkpoint {str(path)!r} does not exist")
+    import torch
+
     try:
         payload = torch.load(path, map_location="cpu", weights_only=True)
         meta = json.loads(payload["metadata_json"])
-        enc = NumpyMLP.from_tensors(payload, "encoder_T")
-        dec = NumpyMLP.from_tensors(payload, "decoder_T_star")
+        enc, dec = (NumpyMLP(*(payload[f"{prefix}.{k}"].double().numpy()
+                               for k in ("W1", "b1", "W2", "b2")))
+                    for prefix in ("encoder_T", "decoder_T_star"))
     except Exception as exc:  # corrupt file, wrong keys, not a torch file
         raise CheckpointError(f"checkpoint {str(path)!r} is corrupt or not a ledsim "
                               f"checkpoint ({type(exc).__name__})") from None

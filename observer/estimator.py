@@ -38,6 +38,9 @@ class Estimator(ABC):
     def predict(self, u) -> None:
         """Propagate to step k+1 under input u_k."""
 
+    def seed_run(self, seed: int) -> None:  # noqa: B027 (deterministic estimators: no-op)
+        """Tie the estimator's own random numbers (if any) to the seed of a run."""
+
     def initial_guess(self, x0) -> np.ndarray:
         if x0 is None:
             return self.system.domain_center.astype(float).copy()

@@ -15,6 +15,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from .errors import ObserverError
 from .estimator import Estimator, finite_mask
 from .nets import NumpyMLP
 from .system import DiscreteSystem
@@ -38,13 +39,9 @@ class KKLDesign:
         lam = np.asarray(self.eigenvalues)
         B = np.asarray(self.B)
         if lam.ndim != 1 or not np.all((lam > -1) & (lam < 1)):
-            raise ValueError(f"eigenvalues={self.eigenvalues!r}: all must lie in (-1, 1)")
+            raise ObserverError(f"eigenvalues={self.eigenvalues!r}: all must lie in (-1, 1)")
         if B.shape[0] != lam.size:
-            raise ValueError(f"B has {B.shape[0]} rows but A has {lam.size} eigenvalues")
-
-    @property
-    def A(self) -> np.ndarray:
-        return np.diag(self.eigenvalues)
+            raise ObserverError(f"B has {B.shape[0]} rows but A has {lam.size} eigenvalues")
 
     @property
     def B_array(self) -> np.ndarray:

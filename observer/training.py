@@ -17,6 +17,7 @@ simulator that can be set to a state and stepped (the closed-form model, MuJoCo)
 from __future__ import annotations
 
 import math
+import sys
 import time
 from dataclasses import asdict, dataclass, field
 
@@ -24,8 +25,10 @@ import numpy as np
 import torch
 from tqdm.auto import tqdm
 
+from .errors import ObserverError
+from .fitting import adam, features, init_features, ridge_solve, set_output, solve_encoder_output
 from .kkl import KKLDesign, KKLObserver, stationary_noise_covariance
-from .nets import TanhMLP
+from .maps import TanhMLP
 from .system import DiscreteSystem
 
 
@@ -54,12 +57,13 @@ class TrainingConfig:
 
     def __post_init__(self):
         if self.decoder_noise not in ("observer", "none"):
-            raise ValueError(f"decoder_noise={self.decoder_noise!r}: use 'observer' or 'none'")
+            raise ObserverError(f"decoder_noise={self.decoder_noise!r}: use 'observer' or 'none'")
         for name in ("n_samples", "hidden", "batch_size", "horizon"):
             if getattr(self, name) < 1:
-                raise ValueError(f"{name}={getattr(self, name)!r}: must be >= 1")
+                raise ObserverError(f"{name}={getattr(self, name)!r}: must be >= 1")
         if not self.output_solve and min(self.encoder_epochs, self.decoder_epochs) < 1:
-            raise ValueError("without output_solve, encoder_epochs and decoder_epochs must be >= 1")
+            raise ObserverError("without output_solve, encoder_epochs and decoder_epochs "
+                                "must be >= 1")
 
 
 @dataclass
@@ -72,11 +76,11 @@ class TrainingReport:
     seconds: float = math.nan
 
 
-def transitions(system: DiscreteSystem, n: int, u_bar: float, rng: np.random.Generator,
+def generate_transitions(system: DiscreteSystem, n: int, u_bar: float, rng: np.random.Generator,
                 horizon: int = 1):
     """``(x_k, x_{k+K})`` and the outputs ``(y_k .. y_{k+K-1})`` for ``n`` uniform states x_k.
 
-    With K = 1 this is the data set D of Algorithm 1. Shapes: ``(n, n_state)`` twice and
+    Step 1 of Algorithm 1: with K = 1 this is its data set D. Shapes: ``(n, n_state)`` twice and
     ``(K, n, n_output)``.
     """
     x = system.sample_domain(rng, n)
@@ -96,84 +100,98 @@ def filtered_outputs(ys: np.ndarray, eigenvalues: np.ndarray, B: np.ndarray) -> 
     return s
 
 
-def _cosine_lr(opt, step, total, lr0, lr1):
-    frac = step / max(total - 1, 1)
-    for group in opt.param_groups:
-        group["lr"] = lr1 + 0.5 * (lr0 - lr1) * (1 + math.cos(math.pi * frac))
+#: Former name of :func:`generate_transitions`.
+transitions = generate_transitions
 
 
-def _adam(net: TanhMLP, loss_fn, n: int, epochs: int, cfg: TrainingConfig, gen, desc: str,
-          progress: bool) -> float:
-    """Minimise ``loss_fn(idx)`` over mini-batches; returns the last epoch's mean loss."""
-    opt = torch.optim.Adam(net.parameters(), lr=cfg.lr)
-    total = epochs * math.ceil(n / cfg.batch_size)
-    step, epoch_loss = 0, math.nan
-    bar = tqdm(range(epochs), desc=desc, disable=not progress, leave=False)
-    for _ in bar:
-        epoch_loss = 0.0
-        for idx in torch.randperm(n, generator=gen).split(cfg.batch_size):
-            _cosine_lr(opt, step, total, cfg.lr, cfg.lr_final)
-            loss = loss_fn(idx)
-            opt.zero_grad()
-            loss.backward()
-            opt.step()
-            epoch_loss += loss.item() * len(idx)
-            step += 1
-        epoch_loss /= n
-        bar.set_postfix(loss=f"{epoch_loss:.2e}")
-    return epoch_loss
+def learn_encoder_T(system: DiscreteSystem, design: KKLDesign, cfg: TrainingConfig, data,
+                    gen: torch.Generator, progress: bool = False):
+    """Step 2 of Algorithm 1: T minimising L_dyn = |T(x_K) - (A^K T(x_0) + S_K)|^2.
 
-
-def _init_features(net: TanhMLP, scale: float, gen) -> None:
-    """Random tanh features spanning the normalised input box (a good start for the solve)."""
-    w = net.hidden.weight
-    with torch.no_grad():
-        w.copy_(torch.randn(w.shape, generator=gen) * scale / math.sqrt(w.shape[1]))
-        net.hidden.bias.copy_((torch.rand(w.shape[0], generator=gen) * 2 - 1) * scale)
-
-
-def _features(net: TanhMLP, v: np.ndarray) -> np.ndarray:
-    """Hidden activations plus a constant column, float64, ``(n, H + 1)``."""
-    W = net.hidden.weight.detach().double().numpy()
-    b = net.hidden.bias.detach().double().numpy()
-    shift, scale = net.in_shift.double().numpy(), net.in_scale.double().numpy()
-    phi = np.tanh(((v - shift) / scale) @ W.T + b)
-    return np.hstack([phi, np.ones((v.shape[0], 1))])
-
-
-def _set_output(net: TanhMLP, coef: np.ndarray) -> None:
-    """Write solved output weights ``coef`` (n_out, H + 1), in output units, into ``net``."""
-    shift, scale = net.out_shift.double().numpy(), net.out_scale.double().numpy()
-    coef = coef.copy()
-    coef[:, -1] -= shift
-    coef /= scale[:, None]
-    with torch.no_grad():
-        net.output.weight.copy_(torch.as_tensor(coef[:, :-1]))
-        net.output.bias.copy_(torch.as_tensor(coef[:, -1]))
-
-
-def _ridge_solve(G: np.ndarray, rhs: np.ndarray, ridge: float) -> np.ndarray:
-    reg = ridge * np.trace(G) / G.shape[0]
-    return np.linalg.solve(G + reg * np.eye(G.shape[0]), rhs)
-
-
-def solve_encoder_output(net: TanhMLP, x0, xk, s, contraction, ridge) -> np.ndarray:
-    """Exact minimiser of L_dyn over T's output layer, for the current hidden layer.
-
-    T(x) = W phi(x) enters L_dyn linearly and A is diagonal, so each z component i is
-    an independent least-squares problem: W_i (phi(x_K) - l_i^K phi(x_0)) = S_K,i.
-    The three Gram matrices are shared by all components. Returns the residual per
-    sample and component, shape ``(n, q)``.
+    Adam (with each residual component weighted by 1 / D(z_i)^2, D the spread of z_i)
+    and/or the exact least-squares output layer. Returns ``(encoder, residual)``, the
+    residual per sample and z component, shape ``(n, q)``.
     """
-    P0, PK = _features(net, x0), _features(net, xk)
-    G00, GKK, GK0 = P0.T @ P0, PK.T @ PK, PK.T @ P0
-    rK, r0 = PK.T @ s, P0.T @ s
-    coef = np.empty((s.shape[1], P0.shape[1]))
-    for i, c in enumerate(contraction):
-        G = GKK - c * (GK0 + GK0.T) + c**2 * G00
-        coef[i] = _ridge_solve(G, rK[:, i] - c * r0[:, i], ridge)
-    _set_output(net, coef)
-    return PK @ coef.T - contraction * (P0 @ coef.T) - s
+    x_np, xk_np, ys_np = data
+    lam = np.asarray(design.eigenvalues, dtype=float)
+    B = design.B_array
+    contraction = lam ** ys_np.shape[0]
+    s_np = filtered_outputs(ys_np, lam, B)
+    # Typical |z_i| = |B y| / (1 - l_i) scales the net's outputs to O(1).
+    z_scale = np.abs(ys_np[0] @ B.T).mean(axis=0) / (1.0 - lam) + 1e-12
+    encoder = TanhMLP(system.n_state, cfg.hidden, design.q, system.domain_center,
+                      system.domain_halfwidth, np.zeros(design.q), z_scale)
+    if cfg.output_solve:
+        init_features(encoder, cfg.feature_scale, gen)
+    X, XK, S = (torch.as_tensor(a, dtype=torch.float64) for a in (x_np, xk_np, s_np))
+    A_t = torch.as_tensor(contraction, dtype=torch.float64)
+    if cfg.encoder_epochs:
+        with torch.no_grad():
+            weight = 1.0 / encoder(X[:20000]).std(dim=0).clamp_min(1e-9) ** 2
+
+        def loss_dyn(idx):
+            res = encoder(XK[idx]) - (A_t * encoder(X[idx]) + S[idx])
+            return (res**2 * weight).sum(dim=1).mean()
+
+        adam(encoder, loss_dyn, len(x_np), cfg.encoder_epochs, cfg, gen, "learn T (L_dyn)",
+             progress)
+    if cfg.output_solve:
+        return encoder, solve_encoder_output(encoder, x_np, xk_np, s_np, contraction,
+                                             cfg.ridge)
+    with torch.no_grad():
+        return encoder, (encoder(XK) - (A_t * encoder(X) + S)).double().numpy()
+
+
+def rescale_z(encoder: TanhMLP, x: np.ndarray, residual: np.ndarray, B: np.ndarray):
+    """Step 3 of Algorithm 1: z~ = z / D(z), B~ = diag(1/D) B, for good.
+
+    Returns ``(spread D, z~ of the training states, B~, L_dyn in the rescaled z)``.
+    """
+    with torch.no_grad():
+        Z = encoder(torch.as_tensor(x, dtype=torch.float64)).double().numpy()
+    spread = np.maximum(Z.std(axis=0), 1e-12)
+    loss_dyn = float(((residual / spread) ** 2).sum(axis=1).mean())
+    return spread, Z / spread, B / spread[:, None], loss_dyn
+
+
+def decoder_inputs(system: DiscreteSystem, Zs: np.ndarray, eigenvalues, B_scaled,
+                   cfg: TrainingConfig, rng: np.random.Generator) -> np.ndarray:
+    """z~ as T* will see it: plus the running observer's z noise (noise-aware T*) or not."""
+    if cfg.decoder_noise != "observer":
+        return Zs
+    R = np.diag(system.measurement_noise_std**2)
+    P = stationary_noise_covariance(eigenvalues, B_scaled, R) * cfg.decoder_noise_scale**2
+    return Zs + rng.standard_normal(Zs.shape) @ np.linalg.cholesky(
+        P + 1e-12 * np.eye(len(eigenvalues))).T
+
+
+def learn_decoder_T_star(system: DiscreteSystem, Zs: np.ndarray, Zin: np.ndarray,
+                         x: np.ndarray, cfg: TrainingConfig, gen: torch.Generator,
+                         progress: bool = False):
+    """Step 4 of Algorithm 1: T* minimising L_recon = |x - T*(z~ + e)|^2.
+
+    Returns ``(decoder, L_recon)`` (errors divided by the domain half-widths, summed).
+    """
+    center, half = system.domain_center, system.domain_halfwidth
+    decoder = TanhMLP(Zs.shape[1], cfg.decoder_hidden or cfg.hidden, system.n_state,
+                      Zs.mean(0), Zs.std(0), center, half)
+    if cfg.output_solve:
+        init_features(decoder, cfg.decoder_feature_scale or cfg.feature_scale, gen)
+    Zin_t = torch.as_tensor(Zin, dtype=torch.float64)
+    X = torch.as_tensor(x, dtype=torch.float64)
+    half_t = torch.as_tensor(half, dtype=torch.float64)
+    if cfg.decoder_epochs:
+        def loss_recon(idx):
+            return (((decoder(Zin_t[idx]) - X[idx]) / half_t) ** 2).sum(dim=1).mean()
+
+        adam(decoder, loss_recon, len(x), cfg.decoder_epochs, cfg, gen, "learn T* (L_recon)",
+             progress)
+    if cfg.output_solve:
+        F = features(decoder, Zin)
+        set_output(decoder, ridge_solve(F.T @ F, F.T @ x, cfg.ridge).T)
+    with torch.no_grad():
+        err = (decoder(Zin_t).double().numpy() - x) / half
+    return decoder, float((err**2).sum(axis=1).mean())
 
 
 def train_kkl(system: DiscreteSystem, design: KKLDesign, config: TrainingConfig | None = None,
@@ -186,7 +204,7 @@ def train_kkl(system: DiscreteSystem, design: KKLDesign, config: TrainingConfig 
         design: eigenvalues of A and B.
         config: hyper-parameters.
         data: optional precomputed ``(x_k, x_{k+K}, (y_k..y_{k+K-1}))`` (e.g. from MuJoCo).
-        progress: show tqdm bars.
+        progress: show progress bars (stderr).
     """
     cfg = config or TrainingConfig()
     t0 = time.perf_counter()
@@ -194,100 +212,32 @@ def train_kkl(system: DiscreteSystem, design: KKLDesign, config: TrainingConfig 
     torch.set_num_threads(cfg.threads)
     gen = torch.Generator().manual_seed(cfg.seed)
     rng = np.random.default_rng(cfg.seed)
+    if design.B_array.shape[1] != system.n_output:
+        raise ObserverError(f"B has {design.B_array.shape[1]} columns but the system has "
+                            f"{system.n_output} outputs")
     stages = tqdm(total=3, desc="Algorithm 1", disable=not progress, leave=False,
-                  bar_format="{desc}: {n}/{total} {postfix}")
+                  bar_format="{desc}: {n}/{total} {postfix}", file=sys.stderr)
     stages.set_postfix_str("transitions")
     if data is None:
-        data = transitions(system, cfg.n_samples, cfg.u_bar, rng, cfg.horizon)
+        data = generate_transitions(system, cfg.n_samples, cfg.u_bar, rng, cfg.horizon)
+    x, xk, ys = (np.asarray(a, dtype=np.float64) for a in data)
+    ys = ys[None] if ys.ndim == 2 else ys
     stages.update()
     stages.set_postfix_str("encoder T (L_dyn)")
-    x_np, xk_np, ys_np = (np.asarray(a, dtype=np.float64) for a in data)
-    if ys_np.ndim == 2:
-        ys_np = ys_np[None]
-    n = x_np.shape[0]
-    lam = np.asarray(design.eigenvalues, dtype=float)
-    B = design.B_array
-    if B.shape[1] != system.n_output:
-        raise ValueError(f"B has {B.shape[1]} columns but the system has "
-                         f"{system.n_output} outputs")
-    contraction = lam ** ys_np.shape[0]
-    s_np = filtered_outputs(ys_np, lam, B)
-    report = TrainingReport()
-
-    # 1. T by L_dyn. Typical |z_i| = |B y| / (1 - l_i) scales the net's outputs to O(1).
-    z_scale = np.abs(ys_np[0] @ B.T).mean(axis=0) / (1.0 - lam) + 1e-12
-    center, half = system.domain_center, system.domain_halfwidth
-    encoder = TanhMLP(system.n_state, cfg.hidden, design.q, center, half,
-                      np.zeros(design.q), z_scale)
-    if cfg.output_solve:
-        _init_features(encoder, cfg.feature_scale, gen)
-    X, XK, S = (torch.as_tensor(a, dtype=torch.float64) for a in (x_np, xk_np, s_np))
-    A_t = torch.as_tensor(contraction, dtype=torch.float64)
-    if cfg.encoder_epochs:
-        weight = torch.ones(design.q)
-
-        def loss_dyn(idx):
-            res = encoder(XK[idx]) - (A_t * encoder(X[idx]) + S[idx])
-            return (res**2 * weight).sum(dim=1).mean()
-
-        # Algorithm 1: weight each residual by 1 / D(z_i)^2, D the spread of z_i.
-        with torch.no_grad():
-            weight = 1.0 / encoder(X[:20000]).std(dim=0).clamp_min(1e-9) ** 2
-        report.loss_dyn = _adam(encoder, loss_dyn, n, cfg.encoder_epochs, cfg, gen,
-                                "learn T (L_dyn)", progress)
-    if cfg.output_solve:
-        res = solve_encoder_output(encoder, x_np, xk_np, s_np, contraction, cfg.ridge)
-    else:
-        with torch.no_grad():
-            res = (encoder(XK) - (A_t * encoder(X) + S)).double().numpy()
+    encoder, residual = learn_encoder_T(system, design, cfg, (x, xk, ys), gen, progress)
     stages.update()
     stages.set_postfix_str("decoder T* (L_recon)")
-
-    # 2. Rescale z for good: z~ = z / D(z), B~ = B / D(z).
-    with torch.no_grad():
-        Z = encoder(X).double().numpy()
-    spread = np.maximum(Z.std(axis=0), 1e-12)
+    report = TrainingReport()
+    spread, Zs, B_scaled, report.loss_dyn = rescale_z(encoder, x, residual, design.B_array)
     report.z_spread = spread.tolist()
-    report.loss_dyn = float(((res / spread) ** 2).sum(axis=1).mean())
-    Zs = Z / spread
-    B_scaled = B / spread[:, None]
-
-    # 3. T* by L_recon on z (+ the running observer's z noise).
-    if cfg.decoder_noise == "observer":
-        R = np.diag(system.measurement_noise_std**2)
-        P = stationary_noise_covariance(lam, B_scaled, R) * cfg.decoder_noise_scale**2
-        Zin = Zs + rng.standard_normal(Zs.shape) @ np.linalg.cholesky(
-            P + 1e-12 * np.eye(design.q)).T
-    else:
-        Zin = Zs
-    decoder = TanhMLP(design.q, cfg.decoder_hidden or cfg.hidden, system.n_state, Zs.mean(0),
-                      Zs.std(0), center, half)
-    if cfg.output_solve:
-        _init_features(decoder, cfg.decoder_feature_scale or cfg.feature_scale, gen)
-    Zin_t = torch.as_tensor(Zin, dtype=torch.float64)
-    half_t = torch.as_tensor(half, dtype=torch.float64)
-    if cfg.decoder_epochs:
-        def loss_recon(idx):
-            return (((decoder(Zin_t[idx]) - X[idx]) / half_t) ** 2).sum(dim=1).mean()
-
-        _adam(decoder, loss_recon, n, cfg.decoder_epochs, cfg, gen, "learn T* (L_recon)",
-              progress)
-    if cfg.output_solve:
-        F = _features(decoder, Zin)
-        _set_output(decoder, _ridge_solve(F.T @ F, F.T @ x_np, cfg.ridge).T)
-    with torch.no_grad():
-        err = (decoder(Zin_t).double().numpy() - x_np) / half
-    report.loss_recon = float((err**2).sum(axis=1).mean())
-
+    lam = np.asarray(design.eigenvalues, dtype=float)
+    Zin = decoder_inputs(system, Zs, lam, B_scaled, cfg, rng)
+    decoder, report.loss_recon = learn_decoder_T_star(system, Zs, Zin, x, cfg, gen, progress)
     stages.update()
     stages.close()
-    enc_np = encoder.export().scaled_output(1.0 / spread)
-    dec_np = decoder.export()
     report.seconds = time.perf_counter() - t0
-    obs = KKLObserver(system, lam, B_scaled, enc_np, dec_np, u_bar=cfg.u_bar)
-    obs.training_metadata = {
-        "design": design.to_dict(),
-        "training": asdict(cfg),
-        "report": asdict(report),
-    }
+    obs = KKLObserver(system, lam, B_scaled, encoder.export().scaled_output(1.0 / spread),
+                      decoder.export(), u_bar=cfg.u_bar)
+    obs.training_metadata = {"design": design.to_dict(), "training": asdict(cfg),
+                             "report": asdict(report)}
     return obs, report

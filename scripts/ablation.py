@@ -16,10 +16,10 @@ from pathlib import Path
 import numpy as np
 
 from ledsim.config import LinkConstants
-from ledsim.paper_model import LEDLinkModel
+from ledsim.paper.model import LEDLinkModel
+from ledsim.paper.scenarios import Noise, get_scenario, run
 from ledsim.presets import DEFAULT_RATES, observer_preset
-from ledsim.scenarios import Noise, get_scenario, run
-from observer.checkpoint import atomic_write_text
+from observer.atomic import atomic_write_text
 from observer.kkl import KKLDesign, series_encoder
 from observer.metrics import converged, rmse
 from observer.training import TrainingConfig, train_kkl
@@ -47,6 +47,7 @@ def variants(Te):
 def main() -> None:
     system = LEDLinkModel(LinkConstants())
     sc = get_scenario("open-loop")
+    n_steps, steady = sc.n_steps(system.Te), sc.steady_step(system.Te)
     rng = np.random.default_rng(7)
     x_test = system.sample_domain(rng, 300)
     starts = system.sample_domain(np.random.default_rng(12345), 20)
@@ -63,12 +64,12 @@ def main() -> None:
         rel = np.sqrt(((obs.encode(x_test) - z) ** 2).mean(0)) / z.std(0)
         errs = []
         for seed in range(10):
-            out = run(system, sc, obs, Noise.draw(system, sc.n_steps, seed))
-            errs.append(rmse(out["xhat"], out["x"], sc.steady_from))
+            out = run(system, sc, obs, Noise.draw(system, n_steps, seed))
+            errs.append(rmse(out.xhat, out.x, steady))
         e = np.mean(errs, axis=0)
-        conv = np.mean([converged(*(lambda o: (o["xhat"], o["x"]))(
-            run(system, sc, obs, Noise.draw(system, sc.n_steps, 1000 + i), starts[i])),
-            sc.steady_from) for i in range(len(starts))])
+        conv = np.mean([converged(*(lambda o: (o.xhat, o.x))(
+            run(system, sc, obs, Noise.draw(system, n_steps, 1000 + i), starts[i])),
+            steady) for i in range(len(starts))])
         row = (f"| {name} | {rep.seconds:.0f} | {np.median(rel):.1e} / {rel.max():.1e} "
                f"| {e[0]:.2e} | {e[1]:.2e} "
                f"| {100 * conv:.0f}% |")

@@ -20,12 +20,12 @@ import numpy as np
 import torch
 
 from ledsim.config import LinkConstants
-from ledsim.evaluate import default_checkpoint
-from ledsim.paper_model import LEDLinkModel
+from ledsim.paper.evaluate import default_checkpoint
+from ledsim.paper.model import LEDLinkModel
 from ledsim.presets import observer_preset
 from observer import checkpoint
+from observer.atomic import atomic_write_text
 from observer.baselines import ExtendedKalmanFilter, ParticleFilter, UnscentedKalmanFilter
-from observer.checkpoint import atomic_write_text
 from observer.training import train_kkl
 
 ROOT = Path(__file__).resolve().parent.parent
@@ -60,9 +60,9 @@ def batched_throughput(obs, n_traj=1024, n_steps=200, dtype=np.float32) -> float
 
 def world_speed(timestep: float, seconds: float = 20.0, repeats: int = 3) -> tuple[float, float]:
     """(control steps per second, real-time factor) of physics + ray sensor, open loop."""
-    from ledsim.sensor import IrradianceSensor
-    from ledsim.simulation import simulate
-    from ledsim.world import LinkWorld, WorldConfig
+    from ledsim.physics.sensor import IrradianceSensor
+    from ledsim.physics.simulation import simulate
+    from ledsim.physics.world import LinkWorld, WorldConfig
 
     world = LinkWorld(WorldConfig(timestep=timestep))
     sensor = IrradianceSensor(world)
@@ -78,29 +78,29 @@ def world_speed(timestep: float, seconds: float = 20.0, repeats: int = 3) -> tup
 
 def closed_loop_speed(estimator: str) -> tuple[float, float]:
     """(real-time factor of the whole loop, estimator us per step), align scenario."""
-    from ledsim.closed_loop import RunConfig, run_once
+    from ledsim.loop.closed_loop import run_once
+    from ledsim.loop.config import RunConfig
 
     best = None
     for _ in range(2):
         out = run_once(RunConfig(scenario="align", estimator=estimator), seed=0)
-        if best is None or out["realtime_factor"] > best["realtime_factor"]:
+        if best is None or out.realtime_factor > best.realtime_factor:
             best = out
-    return best["realtime_factor"], best["us_per_step"]
+    return best.realtime_factor, best.us_per_step
 
 
 def render_speed(width: int = 640, height: int = 480, frames: int = 60) -> tuple[float, float]:
     """(frames/s with beam and overlay, frames/s of the bare MuJoCo render)."""
-    from ledsim.render import FrameRecorder
-    from ledsim.sensor import IrradianceSensor
-    from ledsim.simulation import _update_kinematics
-    from ledsim.world import LinkWorld
+    from ledsim.physics.render import FrameRecorder
+    from ledsim.physics.sensor import IrradianceSensor
+    from ledsim.physics.world import LinkWorld
 
     world = LinkWorld()
     world.reset(0.2)
     sensor = IrradianceSensor(world)
     rec = FrameRecorder(world, width, height, 30, "side")
     try:
-        _update_kinematics(world)
+        world.forward_kinematics()
         reading = sensor.read()
         for _ in range(5):
             rec.render(0.0, reading)

@@ -12,11 +12,12 @@ Writes out/disturbances/*.json and docs/disturbances.md.
 from __future__ import annotations
 
 import argparse
-import json
 from pathlib import Path
 
-from ledsim.closed_loop import ESTIMATORS, TABLE_HEADER, RunConfig, format_summary, run_many
-from observer.checkpoint import atomic_write_text
+from ledsim.loop.config import LOOP_ESTIMATORS, RunConfig
+from ledsim.loop.report import TABLE_HEADER, format_summary, run_many
+from ledsim.results import to_jsonable, write_json
+from observer.atomic import atomic_write_text
 
 ROOT = Path(__file__).resolve().parent.parent
 
@@ -50,16 +51,15 @@ def main() -> None:
              "RTF: real-time factor of the whole loop.", "", TABLE_HEADER]
     results = []
     for label, kwargs in CASES:
-        for est in ESTIMATORS:
+        for est in LOOP_ESTIMATORS:
             cfg = RunConfig(scenario="align", estimator=est, seeds=args.seeds,
                             particles=args.particles, **kwargs)
             summary, _ = run_many(cfg, progress=False)
-            summary["case"] = label
-            results.append(summary)
-            row = format_summary(summary).replace("| align |", f"| {label} |", 1)
+            results.append({"case": label, **to_jsonable(summary)})
+            row = format_summary(summary, first_cell=label)
             print(row, flush=True)
             lines.append(row)
-    atomic_write_text(out_dir / "results.json", json.dumps(results, indent=2) + "\n")
+    write_json(out_dir / "results.json", results)
     atomic_write_text(ROOT / "docs" / "disturbances.md", "\n".join(lines) + "\n")
 
 

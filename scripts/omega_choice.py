@@ -14,8 +14,9 @@ from pathlib import Path
 
 import numpy as np
 
-from ledsim.closed_loop import RunConfig, run_once
-from observer.checkpoint import atomic_write_text
+from ledsim.loop.closed_loop import run_once
+from ledsim.loop.config import RunConfig
+from observer.atomic import atomic_write_text
 
 ROOT = Path(__file__).resolve().parent.parent
 
@@ -30,10 +31,10 @@ def main() -> None:
         for model in ("identified", "simulator", "none"):
             outs = [run_once(RunConfig(scenario=scenario, estimator="kkl", omega_model=model),
                              seed) for seed in range(4)]
-            x1 = np.mean([o["metrics"]["rmse"]["x1"] for o in outs])
-            x2 = np.mean([o["metrics"]["rmse"]["x2"] for o in outs])
-            av = np.mean([o["metrics"]["availability"] for o in outs])
-            us = np.median([o["us_per_step"] for o in outs])
+            x1 = np.mean([o.metrics.rmse["x1"] for o in outs])
+            x2 = np.mean([o.metrics.rmse["x2"] for o in outs])
+            av = np.mean([o.metrics.availability for o in outs])
+            us = np.median([o.us_per_step for o in outs])
             row = f"| {scenario} | {model} | {x1:.2e} | {x2:.2e} | {av:.3f} | {us:.0f} |"
             print(row, flush=True)
             lines.append(row)

@@ -14,8 +14,8 @@ import argparse
 import json
 from pathlib import Path
 
-from ledsim.evaluate import EvaluationConfig, evaluate, write_outputs
-from observer.checkpoint import atomic_write_text
+from ledsim.paper.evaluate import EvaluationConfig, evaluate, write_outputs
+from observer.atomic import atomic_write_text
 
 ROOT = Path(__file__).resolve().parent.parent
 CASES = {
@@ -41,19 +41,18 @@ def main() -> None:
     for scenario, d in CASES[args.table]:
         cfg = EvaluationConfig(scenario=scenario, distance=d, seeds=args.seeds,
                                starts=args.starts)
-        results, traces = evaluate(cfg)
-        write_outputs(results, traces, ROOT / "out" / args.table / f"{scenario}_d{d:g}",
-                      results["Te"])
-        est = results["estimators"]
-        ratio = [est["kkl"]["rmse_steady"][k] / est["pf"]["rmse_steady"][k] for k in KEYS[:2]]
+        result = evaluate(cfg)
+        write_outputs(result, ROOT / "out" / args.table / f"{scenario}_d{d:g}")
+        est = result.estimators
+        ratio = [est["kkl"].rmse_steady[k] / est["pf"].rmse_steady[k] for k in KEYS[:2]]
         for name, e in est.items():
-            conv = e["converged_fraction"]
-            cells = " | ".join(f"{e['rmse_steady'][k]:.2e}" for k in KEYS)
+            conv = e.converged_fraction
+            cells = " | ".join(f"{e.rmse_steady[k]:.2e}" for k in KEYS)
             extra = f" | {ratio[0]:.2f} | {ratio[1]:.2f}" if name == "kkl" else " | |"
             lines.append(f"| {scenario} | {d:g} | {name} | {cells} | "
                          f"{'-' if conv is None else f'{100 * conv:.0f}%'}{extra} |")
-        if results["paper"]:
-            p = results["paper"]
+        if result.paper:
+            p = result.paper
             lines.append(f"| {scenario} | {d:g} | paper ({p['source']}) | " +
                          " | ".join(f"{p[k]:.2e}" for k in KEYS) + " | | | |")
         print(json.dumps({"scenario": scenario, "d": d, "kkl/pf": ratio}))

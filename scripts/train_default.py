@@ -6,8 +6,8 @@ from __future__ import annotations
 import argparse
 
 from ledsim.config import LinkConstants
-from ledsim.evaluate import default_checkpoint
-from ledsim.paper_model import LEDLinkModel
+from ledsim.paper.evaluate import default_checkpoint
+from ledsim.paper.model import LEDLinkModel
 from ledsim.presets import observer_preset
 from observer import checkpoint
 from observer.training import train_kkl

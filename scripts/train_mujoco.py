@@ -9,13 +9,15 @@ from __future__ import annotations
 import argparse
 import time
 
-from ledsim.closed_loop import physics_checkpoint
+import numpy as np
+
 from ledsim.config import LinkConstants
-from ledsim.physics_system import GimbalSystem
+from ledsim.physics.scene import WorldConfig
+from ledsim.physics.system import GimbalSystem
 from ledsim.presets import observer_preset
-from ledsim.world import WorldConfig
+from ledsim.resources import shipped_checkpoint
 from observer import checkpoint
-from observer.training import train_kkl, transitions
+from observer.training import generate_transitions, train_kkl
 
 
 def main() -> None:
@@ -29,13 +31,12 @@ def main() -> None:
         # closed loop (availability 0.11 against 0.67; docs/physics.md).
         design, cfg = observer_preset("default", system.Te)
         cfg.n_samples = args.samples
-        import numpy as np
-
         t0 = time.perf_counter()
-        data = transitions(system, cfg.n_samples, cfg.u_bar, np.random.default_rng(cfg.seed))
+        data = generate_transitions(system, cfg.n_samples, cfg.u_bar,
+                                    np.random.default_rng(cfg.seed))
         t_data = time.perf_counter() - t0
         obs, rep = train_kkl(system, design, cfg, data=data)
-        path = checkpoint.save(obs, physics_checkpoint(d), extra={
+        path = checkpoint.save(obs, shipped_checkpoint(d, "mujoco"), extra={
             "data": {"source": "MuJoCo (set state, step Te)", "seconds": t_data}})
         print(f"d={d:g}: {args.samples} MuJoCo transitions in {t_data:.0f} s, training "
               f"{rep.seconds:.0f} s, L_dyn={rep.loss_dyn:.2e}, L_recon={rep.loss_recon:.2e}"

@@ -8,7 +8,7 @@ import numpy as np  # noqa: E402
 import pytest  # noqa: E402
 
 from ledsim.config import LinkConstants  # noqa: E402
-from ledsim.paper_model import LEDLinkModel  # noqa: E402
+from ledsim.paper.model import LEDLinkModel  # noqa: E402
 
 
 def run_cli(*args):

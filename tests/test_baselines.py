@@ -1,7 +1,7 @@
 import numpy as np
 import pytest
 
-from ledsim.scenarios import Noise, get_scenario, run
+from ledsim.paper.scenarios import Noise, get_scenario, run
 from observer.baselines import ExtendedKalmanFilter, ParticleFilter, UnscentedKalmanFilter
 from observer.metrics import converged, rmse
 
@@ -10,8 +10,8 @@ from observer.metrics import converged, rmse
                                   lambda s: ParticleFilter(s, 1000)])
 def test_filter_tracks_open_loop_from_centre(system, make):
     sc = get_scenario("open-loop")
-    out = run(system, sc, make(system), Noise.draw(system, sc.n_steps, 0))
-    assert np.all(rmse(out["xhat"], out["x"], sc.steady_from) < [6e-3, 1e-2])
+    out = run(system, sc, make(system), Noise.draw(system, sc.n_steps(system.Te), 0))
+    assert np.all(rmse(out.xhat, out.x, sc.steady_step(system.Te)) < [6e-3, 1e-2])
 
 
 @pytest.mark.parametrize("make", [ExtendedKalmanFilter, UnscentedKalmanFilter,

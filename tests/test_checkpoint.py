@@ -2,9 +2,9 @@ import numpy as np
 import pytest
 
 from ledsim.config import LinkConstants
-from ledsim.evaluate import default_checkpoint
-from ledsim.paper_model import LEDLinkModel
-from ledsim.scenarios import Noise, get_scenario, run
+from ledsim.paper.evaluate import default_checkpoint
+from ledsim.paper.model import LEDLinkModel
+from ledsim.paper.scenarios import Noise, get_scenario, run
 from observer import checkpoint
 from observer.metrics import rmse
 
@@ -49,6 +49,6 @@ def test_shipped_checkpoints_load_and_track(d, bound):
     system = LEDLinkModel(LinkConstants(distance=d))
     obs = checkpoint.load(default_checkpoint(d), system)
     sc = get_scenario("open-loop")
-    out = run(system, sc, obs, Noise.draw(system, sc.n_steps, 7))
-    err = rmse(out["xhat"], out["x"], sc.steady_from)
+    out = run(system, sc, obs, Noise.draw(system, sc.n_steps(system.Te), 7))
+    err = rmse(out.xhat, out.x, sc.steady_step(system.Te))
     assert err[0] < bound[0] and err[1] < bound[1]

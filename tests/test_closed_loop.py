@@ -1,8 +1,10 @@
 import numpy as np
 import pytest
 
-from ledsim.closed_loop import RunConfig, first_settled, run_once
-from ledsim.physics_system import GimbalSystem, IdentifiedGimbalModel
+from ledsim.loop.closed_loop import run_once
+from ledsim.loop.config import RunConfig
+from ledsim.loop.metrics import first_settled
+from ledsim.physics.system import GimbalSystem, IdentifiedGimbalModel
 
 
 @pytest.fixture(scope="module")
@@ -62,7 +64,7 @@ def test_kkl_rides_through_an_occlusion():
 
 def test_omega_from_the_simulator_does_not_disturb_the_simulated_world():
     runs = {m: run_once(RunConfig(scenario="align", estimator="kkl", omega_model=m,
-                                  extra={"seconds": 2.0}), seed=3, keep_trace=True)
+                                  seconds=2.0), seed=3, keep_trace=True)
             for m in ("identified", "simulator")}
     a, b = (runs[m]["trace"]["x"] for m in ("identified", "simulator"))
     assert np.abs(a - b)[:, 0].max() < 0.01

@@ -2,10 +2,10 @@ import numpy as np
 import pytest
 import torch
 
-from ledsim.scenarios import Noise, get_scenario, run
+from ledsim.paper.scenarios import Noise, get_scenario, run
 from observer.kkl import KKLDesign, series_encoder, stationary_noise_covariance
+from observer.maps import TanhMLP
 from observer.metrics import rmse
-from observer.nets import TanhMLP
 
 
 def test_paper_design_is_literal():
@@ -57,13 +57,13 @@ def test_decoder_inverts_encoder(tiny_observer, system, rng):
 
 def test_noise_free_observer_converges_from_the_domain_centre(tiny_observer, system):
     sc = get_scenario("open-loop")
-    noise = Noise.draw(system, sc.n_steps, 0)
+    noise = Noise.draw(system, sc.n_steps(system.Te), 0)
     noise.measurement[:] = 0
     noise.process[:] = 0
     out = run(system, sc, tiny_observer, noise)
-    assert np.all(rmse(out["xhat"], out["x"], sc.steady_from) < [1e-2, 2e-2])
+    assert np.all(rmse(out.xhat, out.x, sc.steady_step(system.Te)) < [1e-2, 2e-2])
     # and it really started away from the truth
-    assert abs(out["xhat"][0, 0] - out["x"][0, 0]) > 0.1
+    assert abs(out.xhat[0, 0] - out.x[0, 0]) > 0.1
 
 
 def test_batched_run_equals_step_by_step(tiny_observer, system, rng):
@@ -88,13 +88,13 @@ def test_omega_correction_vanishes_at_u_bar_and_helps_under_input(tiny_observer,
     z = tiny_observer.encode(np.array([[0.1, 0.05]]))
     np.testing.assert_allclose(tiny_observer.omega_correction(z, 0.0), 0.0, atol=1e-12)
     sc = get_scenario("if2")
-    noise = Noise.draw(system, sc.n_steps, 3)
+    noise = Noise.draw(system, sc.n_steps(system.Te), 3)
     noise.measurement[:] = 0
     errs = {}
     for flag in (True, False):
         tiny_observer.omega = flag
         out = run(system, sc, tiny_observer, noise)
-        errs[flag] = rmse(out["xhat"], out["x"], sc.steady_from)[1]
+        errs[flag] = rmse(out.xhat, out.x, sc.steady_step(system.Te))[1]
     tiny_observer.omega = True
     assert errs[True] < errs[False]
 
@@ -102,16 +102,16 @@ def test_omega_correction_vanishes_at_u_bar_and_helps_under_input(tiny_observer,
 @pytest.mark.parametrize("bad", [np.nan, np.inf])
 def test_missing_measurements_never_enter_z(tiny_observer, system, bad):
     sc = get_scenario("open-loop")
-    noise = Noise.draw(system, sc.n_steps, 1)
-    drop = np.zeros((sc.n_steps, 2), bool)
+    noise = Noise.draw(system, sc.n_steps(system.Te), 1)
+    drop = np.zeros((sc.n_steps(system.Te), 2), bool)
     drop[1200:1250, 0] = True  # half a second without photodiode 1
     drop[1300:1320] = True  # 0.2 s without both
     tiny_observer.reset()
     out = run(system, sc, tiny_observer, noise, dropout=drop)
-    assert np.all(np.isfinite(out["xhat"]))
+    assert np.all(np.isfinite(out.xhat))
     assert np.all(np.isfinite(tiny_observer.z))
-    assert rmse(out["xhat"], out["x"], 1400)[0] < 0.01
-    ys = out["y"].copy()
+    assert rmse(out.xhat, out.x, 1400)[0] < 0.01
+    ys = out.y.copy()
     ys[drop] = bad
     batch = tiny_observer.run_batch(ys[:, None, :])
     assert np.all(np.isfinite(batch))

@@ -5,7 +5,7 @@ import pytest
 
 from ledsim.config import ConfigError, LinkConstants
 from ledsim.optics import photodiode_power, receiver_response, receiver_response_derivative
-from ledsim.paper_model import LEDLinkModel
+from ledsim.paper.model import LEDLinkModel
 
 
 def test_power_matches_paper_formula_evaluated_by_hand():

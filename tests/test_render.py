@@ -3,10 +3,9 @@ import numpy as np
 import pytest
 from conftest import run_cli
 
-from ledsim.render import FrameRecorder, RenderError, check_size
-from ledsim.sensor import IrradianceSensor
-from ledsim.simulation import _update_kinematics
-from ledsim.world import LinkWorld
+from ledsim.physics.render import FrameRecorder, RenderError, check_size
+from ledsim.physics.sensor import IrradianceSensor
+from ledsim.physics.world import LinkWorld
 
 HINGE = np.array([0.89, 0.0, 0.0])
 
@@ -23,7 +22,7 @@ def recorder():
 def frame_at(rec, occluded: bool):
     world = rec.world
     world.set_occluder(world.link_midpoint() if occluded else world.occluder_home)
-    _update_kinematics(world)
+    world.forward_kinematics()
     reading = IrradianceSensor(world).read()
     rec.overlay.push(reading.phi, reading.phi, *reading.power)
     return rec.render(0.0, reading)
@@ -94,7 +93,7 @@ def test_render_bad_input_is_one_line_exit_2(tmp_path, args, needle):
 
 def test_missing_gl_library_names_the_fix(monkeypatch):
     """A GL backend that cannot load (as when libOSMesa is absent) gives one clear line."""
-    import ledsim.render as render
+    import ledsim.physics.render as render
 
     def broken(*args, **kwargs):
         raise ImportError("Cannot use OSMesa rendering platform. The PyOpenGL library "

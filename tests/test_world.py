@@ -4,10 +4,10 @@ import numpy as np
 import pytest
 
 from ledsim.config import ConfigError, LinkConstants
-from ledsim.disturbances import DisturbanceError, parse_disturbance
-from ledsim.sensor import IrradianceSensor
-from ledsim.simulation import simulate
-from ledsim.world import SCENE, LinkWorld, WorldConfig, WorldError
+from ledsim.physics.disturbances import DisturbanceError, parse_disturbance
+from ledsim.physics.sensor import IrradianceSensor
+from ledsim.physics.simulation import simulate
+from ledsim.physics.world import SCENE, LinkWorld, WorldConfig, WorldError
 
 HINGE = np.array([0.89, 0.0, 0.0])  # receiver centre = gimbal hinge, from the MJCF
 
@@ -50,14 +50,13 @@ def test_blocking_the_line_of_sight_zeroes_only_the_blocked_photodiode(world):
     # Plate 5 mm in front of the receiver with its lower edge at z = 0: it covers the
     # rays of photodiode 1 (z = +3 mm) and none of photodiode 2's (z = -3 mm).
     world.set_occluder(HINGE + [0.005, 0.0, 0.03])
-    from ledsim.simulation import _update_kinematics
 
-    _update_kinematics(world)
+    world.forward_kinematics()
     r = sensor.read(noise=False)
     assert r.power_clean[0] == 0.0 and r.visible_fraction[0] == 0.0
     assert r.power_clean[1] > 0.5 and r.visible_fraction[1] == 1.0
     world.set_occluder(HINGE + [0.005, 0.0, 0.03 + 0.0029])  # edge between the rays
-    _update_kinematics(world)
+    world.forward_kinematics()
     partial = sensor.read(noise=False).visible_fraction[0]
     assert 0.0 < partial < 1.0
     world.reset()
@@ -121,7 +120,7 @@ def test_neutrally_buoyant_hull_drifts_less_than_a_centimetre_in_ten_seconds():
     assert np.linalg.norm(res.hull_pos[-1] - res.hull_pos[0]) < 0.01
     # and the check can fail: without buoyancy the same hull sinks
     w.reset()
-    w.model.body_gravcomp[w.auv_id] = 0.0
+    w.set_hull_buoyancy(0.0)
     res = simulate(w, IrradianceSensor(w), 1.0)
     assert np.linalg.norm(res.hull_pos[-1] - res.hull_pos[0]) > 0.01
 
@@ -201,9 +200,9 @@ def test_scene_file_loads_as_plain_mjcf():
 def test_knobs_reach_the_compiled_model():
     w = LinkWorld(WorldConfig(hull_mass=40.0, water_density=1025.0, water_viscosity=0.0011,
                               torque_limit=0.02, constants=LinkConstants(dphi=0.2)))
-    assert w.model.body_mass[w.auv_id] > 40.0  # hull geom plus fins
+    assert w.model.body("auv").mass[0] > 40.0  # hull geom plus fins
     assert w.model.opt.density == 1025.0 and w.model.opt.viscosity == 0.0011
-    np.testing.assert_allclose(w.model.actuator_forcerange[w.motor_id], [-0.02, 0.02])
+    np.testing.assert_allclose(w.model.actuator("gimbal_motor").forcerange, [-0.02, 0.02])
     n1, n2 = w.photodiode_normal(0), w.photodiode_normal(1)
     assert math.acos(n1 @ n2) == pytest.approx(0.2, abs=1e-12)
     assert w.set_torque(1.0) == 0.02  # clipped at the limit

@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import numpy as np
 
+from ..errors import ObserverError
 from ..estimator import Estimator, finite_mask
 from ..system import DiscreteSystem
 
@@ -21,12 +22,15 @@ class ParticleFilter(Estimator):
     """
 
     name = "pf"
+    #: A run with seed s draws the filter's numbers from SEED_OFFSET + s, apart from the
+    #: run's noise seeds.
+    SEED_OFFSET = 10_000
 
     def __init__(self, system: DiscreteSystem, n_particles: int = 5000,
                  P0: np.ndarray | None = None, seed: int = 0, jitter: float = 0.5):
         super().__init__(system)
         if n_particles < 1:
-            raise ValueError(f"n_particles={n_particles}: must be >= 1")
+            raise ObserverError(f"n_particles={n_particles}: must be >= 1")
         self.n_particles = n_particles
         self.P0 = self.initial_covariance() if P0 is None else np.asarray(P0, dtype=float)
         self.seed = seed
@@ -35,6 +39,9 @@ class ParticleFilter(Estimator):
         d = system.n_state
         self.bandwidth = jitter * (4.0 / (n_particles * (d + 2))) ** (1.0 / (d + 4))
         self.reset()
+
+    def seed_run(self, seed: int) -> None:
+        self.seed = self.SEED_OFFSET + seed
 
     def reset(self, x0=None) -> None:
         self.rng = np.random.default_rng(self.seed)

@@ -10,21 +10,26 @@ from __future__ import annotations
 
 import csv
 import math
+import sys
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass, fields
 from pathlib import Path
 
-import mujoco
 import numpy as np
 from tqdm.auto import tqdm
 
-from .optics import receiver_response, transmitter_gain
+from observer.atomic import atomic_write_bytes
+
+from ..errors import LedsimError
 from .sensor import IrradianceSensor, SensorReading
 from .world import LinkWorld
 
 
-class ProfileError(ValueError):
+class ProfileError(LedsimError):
     """Unknown torque profile or bad parameter."""
+
+
+TORQUE_PROFILES = ("zero", "sine", "step", "chirp")
 
 
 def torque_profile(name: str, amplitude: float = 0.005, frequency: float = 0.5,
@@ -82,8 +87,6 @@ class SimulationResult:
         return {f.name: getattr(self, f.name) for f in fields(self)}
 
     def save_npz(self, path: Path) -> None:
-        from observer.checkpoint import atomic_write_bytes
-
         atomic_write_bytes(Path(path), lambda tmp: np.savez_compressed(
             open(tmp, "wb"), **self.arrays()))
 
@@ -99,8 +102,6 @@ class SimulationResult:
         return cols
 
     def save_csv(self, path: Path) -> None:
-        from observer.checkpoint import atomic_write_bytes
-
         cols = self.csv_columns()
 
         def write(tmp):
@@ -114,13 +115,6 @@ class SimulationResult:
         atomic_write_bytes(Path(path), write)
 
 
-def _update_kinematics(world: LinkWorld) -> None:
-    m, d = world.model, world.data
-    mujoco.mj_kinematics(m, d)
-    mujoco.mj_comPos(m, d)
-    mujoco.mj_comVel(m, d)
-
-
 def simulate(world: LinkWorld, sensor: IrradianceSensor, seconds: float,
              torque: Callable[[float], float] | None = None,
              disturbances: Sequence = (),
@@ -132,7 +126,8 @@ def simulate(world: LinkWorld, sensor: IrradianceSensor, seconds: float,
         world, sensor: the scene and its photodiode sensor (state as it is now).
         seconds: duration [s].
         torque: open-loop torque profile u(t) [N m] (ignored when ``controller`` is set).
-        disturbances: objects with ``apply(world, t)``.
+        disturbances: :class:`~ledsim.physics.disturbances.Disturbance` objects, already
+            ``reset`` for this run.
         controller: ``controller(reading, t) -> torque`` for closed-loop runs.
         progress: show a progress bar.
     """
@@ -146,11 +141,13 @@ def simulate(world: LinkWorld, sensor: IrradianceSensor, seconds: float,
     hull = np.empty((n, 3))
     power = np.empty((n, 2)) if controller else None
     t0 = world.time
-    for k in tqdm(range(n), disable=not progress, desc="simulate", leave=False):
+    for k in tqdm(range(n), disable=not progress, desc="simulate", leave=False,
+                  file=sys.stderr):
         t = t0 + k * Te
+        world.clear_hull_wrench()
         for dist in disturbances:
             dist.apply(world, t)
-        _update_kinematics(world)
+        world.forward_kinematics()
         if controller is None:
             geo[k] = sensor.geometry()
             state[k] = geo[k, 2, 0], sensor.incidence_rate(0)
@@ -165,9 +162,8 @@ def simulate(world: LinkWorld, sensor: IrradianceSensor, seconds: float,
         hull[k] = world.hull_pos
         applied[k] = world.set_torque(u)
         world.step()
-    c = world.config.constants
     d_, th, ph, vis = geo[:, 0], geo[:, 1], geo[:, 2], geo[:, 3]
-    clean = vis * transmitter_gain(d_, th, c) * receiver_response(ph, c.receiver)
+    clean = sensor.clean_power(d_, th, ph, vis)
     if power is None:
         power = clean + sensor.rng.standard_normal(clean.shape) * sensor.noise_std
     return SimulationResult(
@@ -175,40 +171,3 @@ def simulate(world: LinkWorld, sensor: IrradianceSensor, seconds: float,
         gimbal_angle=gimbal[:, 0], gimbal_rate=gimbal[:, 1], torque=applied,
         power=power, power_clean=clean, incidence_angle=ph, emission_angle=th,
         distance=d_, visible_fraction=vis, occluded=vis < 1.0, hull_pos=hull)
-
-
-def plot_result(res: SimulationResult, path: Path, title: str = "") -> None:
-    """Angles, powers and torque of a run, one PNG."""
-    import matplotlib
-
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
-
-    from observer.checkpoint import atomic_write_bytes
-
-    fig, axes = plt.subplots(3, 1, figsize=(9, 7.5), sharex=True)
-    ax = axes[0]
-    ax.plot(res.t, res.phi, label="phi (photodiode 1) [rad]")
-    ax.plot(res.t, res.phidot, label="phidot [rad/s]", alpha=0.7)
-    ax.set_ylabel("true state")
-    ax.legend(fontsize=8)
-    ax = axes[1]
-    for j in range(2):
-        ax.plot(res.t, res.power[:, j], lw=0.6, alpha=0.5, color=f"C{j}")
-        ax.plot(res.t, res.power_clean[:, j], lw=1.5, color=f"C{j}", label=f"P{j + 1}")
-    occ = res.occluded.any(axis=1)
-    if occ.any():
-        ax.fill_between(res.t, 0, 1, where=occ, transform=ax.get_xaxis_transform(),
-                        color="k", alpha=0.12, label="line of sight blocked")
-    ax.set_ylabel("power [W]")
-    ax.legend(fontsize=8)
-    axes[2].plot(res.t, res.torque, color="C3")
-    axes[2].set_ylabel("torque [N m]")
-    axes[2].set_xlabel("time [s]")
-    for a in axes:
-        a.grid(alpha=0.3)
-    if title:
-        axes[0].set_title(title)
-    fig.tight_layout()
-    atomic_write_bytes(Path(path), lambda tmp: fig.savefig(tmp, dpi=110, format="png"))
-    plt.close(fig)

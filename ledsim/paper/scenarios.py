@@ -11,6 +11,8 @@ if2             0.1 cos(5 t) + 0.2 sin(5 t)             (-0.2 rad, -0.02 rad/s) 
 closed-loop     -0.001 x_hat2                           (0.2 rad, 0 rad/s): the reference
 ==============  ======================================  ===================
 
+Every run lasts 20 s (2000 steps); the steady-state window starts at 10 s.
+
 .. [#] the sine term adds a mean rate of 0.2/5 = 0.04 rad/s; starting at -0.02 rad/s
    keeps the mean rate at +0.02 rad/s as in the other scenarios, inside the domain.
 """
@@ -19,12 +21,16 @@ from __future__ import annotations
 
 import time
 from dataclasses import dataclass
-from functools import cached_property
 
 import numpy as np
 
 from observer.estimator import Estimator
 from observer.system import DiscreteSystem
+
+from ..control import Excitation, PaperRateDamping
+from ..errors import LedsimError
+from ..results import DictAccess
+from ..scenario import Scenario
 
 # Paper Table 1 / Table 2 RMSE: (x1 [rad], x2 [rad/s], y1 [W], y2 [W]).
 PAPER_TABLE1 = {
@@ -45,57 +51,27 @@ PAPER_TABLE2 = {
     ("closed-loop", 0.2): (5.4e-3, 30.9e-3, 1.6e-3, 2.5e-3),
 }
 
-
-@dataclass(frozen=True)
-class Scenario:
-    """One experiment: initial state, input law, length and steady-state window.
-
-    Attributes:
-        name: scenario key.
-        x0: true initial state (rad, rad/s).
-        cos_amp, sin_amp, omega: open-loop input cos_amp cos(omega t) + sin_amp sin(omega t)
-            [rad/s^2], omega [rad/s].
-        feedback_gain: u += -feedback_gain * x_hat2 (closed loop) [1/s].
-        n_steps: length of a run.
-        steady_from: first step of the steady-state window (after the observer transient).
-    """
-
-    name: str
-    x0: tuple[float, float] = (-0.2, 0.02)
-    cos_amp: float = 0.0
-    sin_amp: float = 0.0
-    omega: float = 5.0
-    feedback_gain: float = 0.0
-    n_steps: int = 2000
-    steady_from: int = 1000
-
-    def control(self, k: int, Te: float, xhat: np.ndarray) -> float:
-        """u_k [rad/s^2] from the time k Te and the current estimate."""
-        return float(self.excitation(xhat, k * Te) - self.feedback_gain * xhat[1])
-
-    @cached_property
-    def excitation(self):
-        from .control import Excitation
-
-        return Excitation(self.cos_amp, self.sin_amp, self.omega)
-
-    @property
-    def is_open_loop(self) -> bool:
-        return self.feedback_gain == 0.0
-
-
-SCENARIOS = {
-    "open-loop": Scenario("open-loop"),
-    "if1": Scenario("if1", cos_amp=0.1),
-    "if2": Scenario("if2", x0=(-0.2, -0.02), cos_amp=0.1, sin_amp=0.2),
-    "closed-loop": Scenario("closed-loop", x0=(0.2, 0.0), feedback_gain=0.001),
+PAPER_SCENARIOS = {
+    s.name: s for s in (
+        Scenario("open-loop", (-0.2, 0.02), Excitation(), 20.0, 10.0,
+                 description="no input"),
+        Scenario("if1", (-0.2, 0.02), Excitation(cos_amp=0.1), 20.0, 10.0,
+                 description="u = 0.1 cos(5 t)"),
+        Scenario("if2", (-0.2, -0.02), Excitation(cos_amp=0.1, sin_amp=0.2), 20.0, 10.0,
+                 description="u = 0.1 cos(5 t) + 0.2 sin(5 t)"),
+        Scenario("closed-loop", (0.2, 0.0), PaperRateDamping(0.001), 20.0, 10.0,
+                 description="u = -0.001 phidot_hat"),
+    )
 }
+#: Former name of the registry.
+SCENARIOS = PAPER_SCENARIOS
 
 
 def get_scenario(name: str) -> Scenario:
-    if name not in SCENARIOS:
-        raise KeyError(f"unknown scenario {name!r}: choose one of {', '.join(SCENARIOS)}")
-    return SCENARIOS[name]
+    if name not in PAPER_SCENARIOS:
+        raise LedsimError(f"unknown scenario {name!r}: choose one of "
+                          f"{', '.join(PAPER_SCENARIOS)}")
+    return PAPER_SCENARIOS[name]
 
 
 @dataclass
@@ -112,19 +88,40 @@ class Noise:
                    rng.standard_normal((n_steps, system.n_output)) * system.measurement_noise_std)
 
 
-def run(system: DiscreteSystem, scenario: Scenario, estimator: Estimator, noise: Noise,
-        x0_guess=None, dropout: np.ndarray | None = None) -> dict:
-    """Simulate the plant with ``estimator`` in the loop.
+@dataclass
+class Trajectory(DictAccess):
+    """One closed-form run. Arrays have one row per step.
 
-    Returns a dict of arrays: ``x`` (true), ``xhat``, ``y`` (measured), ``y_clean``
-    (noise-free h(x)), ``yhat`` (h(x_hat)), ``u``, and ``seconds`` spent in the estimator.
+    Attributes:
+        x: true state (rad, rad/s); xhat: estimate; y: measured powers [W];
+        y_clean: noise-free h(x) [W]; yhat: h(x_hat) [W]; u: input [rad/s^2];
+        seconds: wall time spent in the estimator [s].
+    """
+
+    x: np.ndarray
+    xhat: np.ndarray
+    y: np.ndarray
+    y_clean: np.ndarray
+    yhat: np.ndarray
+    u: np.ndarray
+    seconds: float
+
+
+def run(system: DiscreteSystem, scenario: Scenario, estimator: Estimator, noise: Noise,
+        x0_guess=None, dropout: np.ndarray | None = None) -> Trajectory:
+    """Simulate the closed-form plant with ``estimator`` in the loop.
+
     ``dropout``: optional boolean (N, p) mask of measurements replaced by NaN.
     """
-    N = scenario.n_steps
+    N = scenario.n_steps(system.Te)
+    if len(noise.measurement) < N:
+        raise LedsimError(f"noise has {len(noise.measurement)} steps, the scenario {N}")
     n, p = system.n_state, system.n_output
     x = np.asarray(scenario.x0, dtype=float)
     xs, xhats = np.empty((N, n)), np.empty((N, n))
     ys, us = np.empty((N, p)), np.empty(N)
+    law = scenario.start_law(system.constants)
+    warmup = int(round(scenario.warmup / system.Te))
     estimator.reset(x0_guess)
     spent = 0.0
     for k in range(N):
@@ -135,11 +132,10 @@ def run(system: DiscreteSystem, scenario: Scenario, estimator: Estimator, noise:
         ys[k] = y
         t0 = time.perf_counter()
         xhat = estimator.update(y)
-        u = scenario.control(k, system.Te, xhat)
+        u = 0.0 if k < warmup else float(law(xhat, k * system.Te))
         estimator.predict(u)
         spent += time.perf_counter() - t0
         xhats[k] = xhat
         us[k] = u
         x = system.f(x, u) + noise.process[k]
-    return {"x": xs, "xhat": xhats, "y": ys, "y_clean": system.h(xs), "yhat": system.h(xhats),
-            "u": us, "seconds": spent}
+    return Trajectory(xs, xhats, ys, system.h(xs), system.h(xhats), us, spent)

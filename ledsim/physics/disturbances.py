@@ -1,7 +1,9 @@
 """Disturbances acting on the link, applied once per control period before physics.
 
-Each is a small dataclass with an ``apply(world, t)`` method (t in s) and its knobs as
-fields; :func:`parse_disturbance` builds one from ``name[:key=value,...]`` (the CLI form).
+Each is a small dataclass with its knobs as fields, ``reset(seed)`` at the start of a
+run and ``apply(world, t)`` (t in s) once per control period; it acts only through
+:class:`~ledsim.physics.world.LinkWorld`'s methods. :func:`parse_disturbance` builds one
+from ``name[:key=value,...]`` (the CLI form).
 
 ================  ============================================================
 name              what it does
@@ -20,15 +22,32 @@ from dataclasses import dataclass, fields
 
 import numpy as np
 
+from ..errors import LedsimError
 from .world import LinkWorld
 
 
-class DisturbanceError(ValueError):
+class DisturbanceError(LedsimError):
     """Unknown disturbance name or bad parameter."""
 
 
+class Disturbance:
+    """Base of every disturbance: seeded at the start of a run, applied every step."""
+
+    def reset(self, seed: int) -> None:
+        """Start of a run with seed ``seed`` (disturbances with random parts reseed)."""
+
+    def apply(self, world: LinkWorld, t: float) -> None:
+        raise NotImplementedError
+
+    @property
+    def event_end(self) -> float | None:
+        """Time [s] at which a transient event (an occlusion) ends, after which the loop
+        should recover; None for disturbances that last the whole run."""
+        return None
+
+
 @dataclass
-class HullVibration:
+class HullVibration(Disturbance):
     """Hull vibration: ``torque cos(2 pi f t)`` about z and ``force cos(2 pi f t)`` along y.
 
     Cosine, so the hull's velocity oscillates about zero (a sine started at rest would
@@ -46,13 +65,11 @@ class HullVibration:
 
     def apply(self, world: LinkWorld, t: float) -> None:
         s = math.cos(2 * math.pi * self.frequency * t)
-        xfrc = world.data.xfrc_applied[world.auv_id]
-        xfrc[1] = self.force * s
-        xfrc[5] = self.torque * s
+        world.add_hull_wrench(force=(0.0, self.force * s, 0.0), torque=(0.0, 0.0, self.torque * s))
 
 
 @dataclass
-class WaterCurrent:
+class WaterCurrent(Disturbance):
     """Water current through MuJoCo's medium velocity (``opt.wind``), with the AUV
     holding station against it.
 
@@ -82,20 +99,24 @@ class WaterCurrent:
     KP_YAW, KD_YAW, KI_YAW = 200.0, 50.0, 200.0
 
     def __post_init__(self):
-        self._rng = np.random.default_rng(self.seed)
+        self.reset(self.seed)
+
+    def reset(self, seed: int) -> None:
+        self.seed = seed
+        self._rng = np.random.default_rng(seed)
         self._g = np.zeros(3)
         self._last_t = None
         self._int = np.zeros(4)
 
     def _hold(self, world: LinkWorld, dt: float) -> None:
         err = world.hull_pos - world.initial_hull_pos
-        R = world.data.xmat[world.auv_id].reshape(3, 3)
-        yaw = math.atan2(R[1, 0], R[0, 0])
-        vel = world.body_velocity(world.auv_id)
+        yaw = world.hull_yaw
+        vel = world.hull_velocity()
         self._int += dt * np.r_[err, yaw]
-        xfrc = world.data.xfrc_applied[world.auv_id]
-        xfrc[:3] = -self.KP * err - self.KD * vel[3:] - self.KI * self._int[:3]
-        xfrc[5] = -self.KP_YAW * yaw - self.KD_YAW * vel[2] - self.KI_YAW * self._int[3]
+        world.add_hull_wrench(
+            force=-self.KP * err - self.KD * vel[3:] - self.KI * self._int[:3],
+            torque=(0.0, 0.0, -self.KP_YAW * yaw - self.KD_YAW * vel[2] - self.KI_YAW *
+                    self._int[3]))
 
     def apply(self, world: LinkWorld, t: float) -> None:
         dt = 0.0 if self._last_t is None else t - self._last_t
@@ -107,11 +128,11 @@ class WaterCurrent:
             self._g = a * self._g + self.gust * math.sqrt(1 - a * a) * \
                 self._rng.standard_normal(3) * np.array([1.0, 1.0, 0.3])
         steady = self.speed * np.array([math.cos(self.heading), math.sin(self.heading), 0.0])
-        world.model.opt.wind[:] = steady + self._g
+        world.set_current(steady + self._g)
 
 
 @dataclass
-class TransmitterMotion:
+class TransmitterMotion(Disturbance):
     """The LED platform sways sideways and yaws sinusoidally.
 
     Attributes:
@@ -128,14 +149,11 @@ class TransmitterMotion:
         w = 2 * math.pi * self.frequency
         pos = world.transmitter_home + np.array([0.0, self.sway * math.sin(w * t), 0.0])
         vel = np.array([0.0, self.sway * w * math.cos(w * t), 0.0])
-        world.set_transmitter(pos, vel)
-        if self.yaw:
-            a = self.yaw * math.sin(w * t)
-            world.data.mocap_quat[world.tx_mocap] = [math.cos(a / 2), 0.0, 0.0, math.sin(a / 2)]
+        world.set_transmitter(pos, vel, yaw=self.yaw * math.sin(w * t) if self.yaw else None)
 
 
 @dataclass
-class Occlusion:
+class Occlusion(Disturbance):
     """A plate slides down through the line of sight.
 
     Attributes:
@@ -147,8 +165,7 @@ class Occlusion:
     duration: float = 0.5
 
     def apply(self, world: LinkWorld, t: float) -> None:
-        g = world.model.geom("occluder_plate")
-        half = float(g.size[2])
+        half = world.occluder_half_size
         speed = 2 * half / self.duration  # covers the beam centre for `duration`
         mid = world.link_midpoint()
         z = mid[2] + half - speed * (t - self.start)
@@ -159,6 +176,10 @@ class Occlusion:
         """Whether the plate is over the beam centre at time t (for the flags)."""
         return self.start <= t < self.start + self.duration
 
+    @property
+    def event_end(self) -> float:
+        return self.start + self.duration
+
 
 DISTURBANCES = {
     "vibration": HullVibration,
@@ -168,7 +189,7 @@ DISTURBANCES = {
 }
 
 
-def parse_disturbance(text: str):
+def parse_disturbance(text: str) -> Disturbance:
     """``"vibration:frequency=3,torque=0.2"`` -> HullVibration(frequency=3, torque=0.2)."""
     name, _, args = text.partition(":")
     if name not in DISTURBANCES:

@@ -15,8 +15,8 @@ import numpy as np
 
 from observer.system import DiscreteSystem
 
-from .config import LinkConstants
-from .optics import receiver_response, receiver_response_derivative, transmitter_gain
+from ..config import LinkConstants
+from ..optics import pair_power, pair_power_jacobian, transmitter_gain
 
 
 class LEDLinkModel(DiscreteSystem):
@@ -64,21 +64,14 @@ class LEDLinkModel(DiscreteSystem):
         return np.stack([x[..., 0] - self.Te * x2, x2], axis=-1)
 
     def h(self, x):
-        phi = np.asarray(x, dtype=float)[..., 0]
-        r = self.constants.receiver
-        return self.cp_bar * np.stack(
-            [receiver_response(phi, r), receiver_response(phi + self.constants.dphi, r)], axis=-1)
+        return pair_power(self.cp_bar, np.asarray(x, dtype=float)[..., 0], self.constants)
 
     def f_jacobian(self, x, u=0.0, eps=None):
         return np.broadcast_to(self._F, np.shape(x)[:-1] + (2, 2)).copy()
 
     def h_jacobian(self, x, eps=None):
-        phi = np.asarray(x, dtype=float)[..., 0]
-        r = self.constants.receiver
-        jac = np.zeros(np.shape(phi) + (2, 2))
-        jac[..., 0, 0] = self.cp_bar * receiver_response_derivative(phi, r)
-        jac[..., 1, 0] = self.cp_bar * receiver_response_derivative(phi + self.constants.dphi, r)
-        return jac
+        return pair_power_jacobian(self.cp_bar, np.asarray(x, dtype=float)[..., 0],
+                                   self.constants)
 
     def metadata(self) -> dict:
         meta = super().metadata()

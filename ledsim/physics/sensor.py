@@ -1,9 +1,10 @@
 """Ray-based LED irradiance sensor for the two photodiodes.
 
-For each photodiode, rays are cast with ``mj_multiRay`` from the photodiode to points on
-the LED's emitting aperture (its centre and a ring). The share of rays that reach the
-LED scales the direct power (partial blockage); the power itself is eq.
-(pow-d-theta-phi) evaluated on MuJoCo's poses with the observer model's constants:
+For each photodiode, rays are cast from the photodiode to points on the LED's emitting
+aperture (its centre and a ring). The share of rays that reach the LED scales the direct
+power (partial blockage); the power itself is eq. (pow-d-theta-phi)
+(:func:`ledsim.optics.received_power`) evaluated on MuJoCo's poses with the observer
+model's constants:
 
     d     = |LED - photodiode|                                   [m]
     theta = angle(LED axis, photodiode - LED)                    [rad]
@@ -17,13 +18,10 @@ from __future__ import annotations
 import math
 from dataclasses import dataclass
 
-import mujoco
 import numpy as np
 
-from .optics import receiver_response, transmitter_gain
+from ..optics import received_power, transmitter_gain
 from .world import LinkWorld, WorldError
-
-RAY_GROUPS = np.array([1, 1, 1, 0, 0, 0], dtype=np.uint8)  # groups 0-2 block light
 
 
 @dataclass
@@ -73,39 +71,31 @@ class IrradianceSensor:
         self._aperture = np.zeros((n, 3))
         self._aperture[1:, 0] = world.config.aperture_radius * np.cos(angles)
         self._aperture[1:, 1] = world.config.aperture_radius * np.sin(angles)
-        self._geomid = np.zeros(n, dtype=np.int32)
-        self._dist = np.zeros(n)
         self._check_line_of_sight()
 
     def _check_line_of_sight(self) -> None:
         """Refuse geometries where the LED can never be seen (behind, or walled off)."""
         w = self.world
-        # Only the scene itself counts: park the (moving) occluder while checking.
-        occluder = w.data.mocap_pos[w.occluder_mocap].copy()
-        w.set_occluder(w.occluder_home)
-        mujoco.mj_kinematics(w.model, w.data)
-        reading = self.read(noise=False)
-        w.set_occluder(occluder)
-        mujoco.mj_kinematics(w.model, w.data)
-        led = w.led_pos
+        with w.parked_occluder():  # only the scene itself counts
+            reading = self.read(noise=False)
+        led = np.round(w.led_pos, 4).tolist()
         for i in range(2):
             if abs(reading.incidence_angle[i]) >= math.pi / 2:
-                raise WorldError(f"LED at {np.round(led, 4).tolist()} m is behind photodiode "
-                                 f"{i + 1} (incidence angle {reading.incidence_angle[i]:.2f} rad):"
-                                 " no line of sight is possible")
+                raise WorldError(f"LED at {led} m is behind photodiode {i + 1} (incidence "
+                                 f"angle {reading.incidence_angle[i]:.2f} rad): no line of "
+                                 "sight is possible")
             if reading.emission_angle[i] >= math.pi / 2:
-                raise WorldError(f"LED at {np.round(led, 4).tolist()} m faces away from "
-                                 f"photodiode {i + 1} (emission angle "
-                                 f"{reading.emission_angle[i]:.2f} rad): no line of sight")
+                raise WorldError(f"LED at {led} m faces away from photodiode {i + 1} "
+                                 f"(emission angle {reading.emission_angle[i]:.2f} rad): no "
+                                 "line of sight")
             if reading.visible_fraction[i] == 0:
-                raise WorldError(f"LED at {np.round(led, 4).tolist()} m is hidden from "
-                                 f"photodiode {i + 1} by the scene: no line of sight")
+                raise WorldError(f"LED at {led} m is hidden from photodiode {i + 1} by the "
+                                 "scene: no line of sight")
 
     def aperture_points(self) -> np.ndarray:
         """World positions of the aperture sample points, shape (n_rays, 3)."""
         w = self.world
-        R = w.data.site_xmat[w.led_id].reshape(3, 3)
-        return w.led_pos + self._aperture @ R.T
+        return w.led_pos + self._aperture @ w.led_rotation.T
 
     def visible_fraction(self, i: int, targets: np.ndarray | None = None) -> float:
         """Share of rays from photodiode ``i`` that reach the LED aperture unblocked."""
@@ -114,11 +104,10 @@ class IrradianceSensor:
         vec = (self.aperture_points() if targets is None else targets) - origin
         length = np.sqrt((vec * vec).sum(axis=1))
         vec /= length[:, None]
-        mujoco.mj_multiRay(w.model, w.data, origin, vec.ravel(), RAY_GROUPS, 1, w.gimbal_id,
-                           self._geomid, self._dist, None, len(vec), float(length.max()))
-        # mj_multiRay reports -1 for rays that hit nothing before the cutoff.
-        blocked = sum(1 for dist, n in zip(self._dist.tolist(), length.tolist(), strict=True)
-                      if 0.0 <= dist < n)
+        dist = w.cast_rays(origin, vec, float(length.max()))
+        # cast_rays reports -1 for rays that hit nothing before the cutoff.
+        blocked = sum(1 for di, n in zip(dist.tolist(), length.tolist(), strict=True)
+                      if 0.0 <= di < n)
         return 1.0 - blocked / len(vec)
 
     def geometry(self) -> tuple[list, list, list, list]:
@@ -127,18 +116,14 @@ class IrradianceSensor:
         Plain-float arithmetic on 3-vectors: several times faster than numpy at this size.
         """
         w = self.world
-        xpos, xmat = w.data.site_xpos, w.data.site_xmat
-        lx, ly, lz = xpos[w.led_id].tolist()
-        led_m = xmat[w.led_id].tolist()
-        ax, ay, az = led_m[2], led_m[5], led_m[8]  # LED axis: z column
-        g = w.data.xmat[w.gimbal_id].tolist()
-        hx, hy, hz = g[2], g[5], g[8]  # hinge axis: gimbal z column
+        lx, ly, lz = w.led_pos.tolist()
+        ax, ay, az = w.led_rotation[:, 2].tolist()  # LED axis
+        hx, hy, hz = w.hinge_axis.tolist()
         targets = self.aperture_points()
         dist, theta, phi, vis = [], [], [], []
-        for i, sid in enumerate(w.pd_ids):
-            px, py, pz = xpos[sid].tolist()
-            m = xmat[sid].tolist()
-            nx, ny, nz = m[2], m[5], m[8]
+        for i in range(2):
+            px, py, pz = w.photodiode_pos(i).tolist()
+            nx, ny, nz = w.photodiode_normal(i).tolist()
             vx, vy, vz = lx - px, ly - py, lz - pz
             d = math.sqrt(vx * vx + vy * vy + vz * vz)
             vx, vy, vz = vx / d, vy / d, vz / d
@@ -150,11 +135,15 @@ class IrradianceSensor:
             vis.append(self.visible_fraction(i, targets))
         return dist, theta, phi, vis
 
+    def clean_power(self, dist, theta, phi, vis) -> np.ndarray:
+        """Noise-free powers [W] from the geometry (any matching array shapes)."""
+        c = self.constants
+        return received_power(transmitter_gain(dist, theta, c), phi, c.receiver, vis)
+
     def read(self, noise: bool = True) -> SensorReading:
         """Sample both photodiodes at the current MjData state."""
-        c = self.constants
         dist, theta, phi, vis = (np.array(v) for v in self.geometry())
-        clean = vis * transmitter_gain(dist, theta, c) * receiver_response(phi, c.receiver)
+        clean = self.clean_power(dist, theta, phi, vis)
         power = clean + (self.rng.standard_normal(2) * self.noise_std if noise else 0.0)
         return SensorReading(power, clean, phi, theta, dist, vis, float(phi[0]),
                              self.incidence_rate(0))
@@ -164,7 +153,7 @@ class IrradianceSensor:
         hinge axis (exact for rotations about that axis)."""
         w = self.world
         lx, ly, lz = (w.led_pos - w.photodiode_pos(i)).tolist()
-        wx, wy, wz, vx, vy, vz = w.site_velocity(w.pd_ids[i]).tolist()
+        wx, wy, wz, vx, vy, vz = w.photodiode_velocity(i).tolist()
         tx, ty, tz = w.transmitter_velocity.tolist()
         rx, ry, rz = tx - vx, ty - vy, tz - vz
         d2 = lx * lx + ly * ly + lz * lz

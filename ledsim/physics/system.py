@@ -27,23 +27,13 @@ of times per step (UKF sigma points, particle filter) and optionally for Omega.
 
 from __future__ import annotations
 
-import mujoco
 import numpy as np
 
 from observer.system import DiscreteSystem
 
-from .optics import receiver_response, receiver_response_derivative, transmitter_gain
+from ..optics import pair_power, pair_power_jacobian
 from .sensor import IrradianceSensor
-from .simulation import _update_kinematics
 from .world import LinkWorld, WorldConfig
-
-
-def hinge_inertia(world: LinkWorld) -> float:
-    """Gimbal inertia about its hinge incl. armature [kg m^2] (MuJoCo's mass matrix)."""
-    mujoco.mj_forward(world.model, world.data)
-    M = np.zeros((world.model.nv, world.model.nv))
-    mujoco.mj_fullM(world.model, world.data, M)
-    return float(M[world.hinge_dof, world.hinge_dof])
 
 
 class GimbalSystem(DiscreteSystem):
@@ -67,7 +57,7 @@ class GimbalSystem(DiscreteSystem):
         self.domain_low = -self.domain_high
         self.process_noise_std = np.array(c.process_noise_std, dtype=float)
         self.measurement_noise_std = np.full(2, c.measurement_noise_std)
-        self.inertia = hinge_inertia(self.world)
+        self.inertia = self.world.hinge_inertia()
         self.world.reset()
         self.phi_home = float(self.sensor.geometry()[2][0])  # phi at gimbal angle 0
 
@@ -76,9 +66,6 @@ class GimbalSystem(DiscreteSystem):
     def torque_for(self, u) -> np.ndarray:
         """Motor torque [N m] that commands angular acceleration ``u`` [rad/s^2] of phi."""
         return -self.inertia * np.asarray(u, dtype=float)
-
-    def acceleration_for(self, torque) -> np.ndarray:
-        return -np.asarray(torque, dtype=float) / self.inertia
 
     # -- f and h by simulation -----------------------------------------------------------
 
@@ -95,7 +82,7 @@ class GimbalSystem(DiscreteSystem):
             self._set_state(xk)
             w.set_torque(tau)
             w.step()
-            _update_kinematics(w)
+            w.forward_kinematics()
             out[k] = self.phi_home - w.gimbal_angle, self.sensor.incidence_rate(0)
         return out.reshape(x.shape)
 
@@ -106,9 +93,7 @@ class GimbalSystem(DiscreteSystem):
         for k, xk in enumerate(batch):
             self._set_state(xk)
             geo[k] = self.sensor.geometry()
-        c = self.constants
-        power = geo[:, 3] * transmitter_gain(geo[:, 0], geo[:, 1], c) * receiver_response(
-            geo[:, 2], c.receiver)
+        power = self.sensor.clean_power(geo[:, 0], geo[:, 1], geo[:, 2], geo[:, 3])
         return power.reshape(x.shape[:-1] + (2,))
 
     def metadata(self) -> dict:
@@ -162,9 +147,7 @@ class IdentifiedGimbalModel(DiscreteSystem):
         coef_rate = np.linalg.lstsq(feats, xn[:, 1], rcond=None)[0]
         phis = np.linspace(-0.6, 0.6, 61)
         y = source.h(np.stack([phis, 0 * phis], -1))
-        g = np.stack([receiver_response(phis, source.constants.receiver),
-                      receiver_response(phis + source.constants.dphi,
-                                        source.constants.receiver)], -1)
+        g = pair_power(1.0, phis, source.constants)
         gain = float((g * y).sum() / (g * g).sum())
         return cls(source, coef_phi, coef_rate, gain)
 
@@ -178,10 +161,7 @@ class IdentifiedGimbalModel(DiscreteSystem):
         return np.stack([x[..., 0] + feats @ self.coef_phi, feats @ self.coef_rate], axis=-1)
 
     def h(self, x):
-        phi = np.asarray(x, dtype=float)[..., 0]
-        r = self.constants.receiver
-        return self.power_gain * np.stack(
-            [receiver_response(phi, r), receiver_response(phi + self.constants.dphi, r)], -1)
+        return pair_power(self.power_gain, np.asarray(x, dtype=float)[..., 0], self.constants)
 
     def f_jacobian(self, x, u=0.0, eps=None):
         x = np.asarray(x, dtype=float)
@@ -193,13 +173,8 @@ class IdentifiedGimbalModel(DiscreteSystem):
         return jac
 
     def h_jacobian(self, x, eps=None):
-        phi = np.asarray(x, dtype=float)[..., 0]
-        r = self.constants.receiver
-        jac = np.zeros(np.shape(phi) + (2, 2))
-        jac[..., 0, 0] = self.power_gain * receiver_response_derivative(phi, r)
-        jac[..., 1, 0] = self.power_gain * receiver_response_derivative(
-            phi + self.constants.dphi, r)
-        return jac
+        return pair_power_jacobian(self.power_gain, np.asarray(x, dtype=float)[..., 0],
+                                   self.constants)
 
     def metadata(self) -> dict:
         meta = dict(self.source_metadata)

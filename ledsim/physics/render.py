@@ -1,7 +1,8 @@
 """Offscreen rendering of the link: MuJoCo frames, the LED beam, and a live overlay.
 
-``MUJOCO_GL`` must be chosen before ``mujoco`` is imported (``ledsim render`` sets it
-from ``--gl``, default ``osmesa``). What a frame shows:
+``MUJOCO_GL`` must be chosen before ``mujoco`` is imported: :mod:`ledsim.physics` sets
+the default ``osmesa``, and ``ledsim render --gl`` sets it before any import. What a
+frame shows:
 
 - the AUV, the gimbal and the transmitter in a fogged, water-tinted scene;
 - one beam per photodiode from the LED: cyan with an opacity that follows the received
@@ -12,6 +13,7 @@ from ``--gl``, default ``osmesa``). What a frame shows:
 from __future__ import annotations
 
 import os
+import tempfile
 from collections import deque
 from pathlib import Path
 
@@ -19,9 +21,9 @@ import mujoco
 import numpy as np
 from PIL import Image, ImageDraw, ImageFont
 
-from .errors import UserError
-from .optics import peak_power
-from .sensor import RAY_GROUPS, SensorReading
+from ..errors import LedsimError
+from ..optics import peak_power
+from .sensor import SensorReading
 from .world import LinkWorld
 
 BEAM_WIDTH = 0.0012  # m, radius of the drawn beam capsules
@@ -29,7 +31,7 @@ CLEAR = np.array([0.35, 1.0, 0.95])
 BLOCKED = np.array([1.0, 0.25, 0.15])
 
 
-class RenderError(UserError):
+class RenderError(LedsimError):
     """Rendering cannot start (bad size, no OpenGL backend)."""
 
 
@@ -84,14 +86,13 @@ def add_beams(scene: mujoco.MjvScene, world: LinkWorld, reading: SensorReading,
 def blocking_points(world: LinkWorld) -> list[np.ndarray | None]:
     """Where the centre ray from each photodiode to the LED is stopped (None: clear)."""
     points = []
-    geomid = np.zeros(1, dtype=np.int32)
     for i in range(2):
         origin = world.photodiode_pos(i).copy()
         vec = world.led_pos - origin
         length = float(np.linalg.norm(vec))
-        dist = mujoco.mj_ray(world.model, world.data, origin, vec / length,
-                             RAY_GROUPS, 1, world.gimbal_id, geomid)
-        points.append(origin + dist * vec / length if 0 <= dist < length else None)
+        unit = vec / length
+        dist = float(world.cast_rays(origin, unit[None, :], length)[0])
+        points.append(origin + dist * unit if 0 <= dist < length else None)
     return points
 
 
@@ -155,7 +156,11 @@ class VideoWriter:
         import imageio.v2 as imageio
 
         self.path = Path(path)
-        self.tmp = self.path.with_name(f".{self.path.name}.partial.mp4")
+        # A name of its own per writer: two renders to one --out never share it.
+        fd, tmp = tempfile.mkstemp(dir=self.path.parent, prefix=f".{self.path.name}.",
+                                   suffix=".partial.mp4")
+        os.close(fd)
+        self.tmp = Path(tmp)
         self.writer = imageio.get_writer(self.tmp, fps=fps, codec="libx264", quality=7,
                                          macro_block_size=2, ffmpeg_log_level="error")
         self.frames = 0
@@ -176,11 +181,10 @@ class FrameRecorder:
     """Renders frames at ``fps`` during a closed-loop run (an ``on_step`` callback)."""
 
     def __init__(self, world: LinkWorld, width: int, height: int, fps: float,
-                 camera: str, writer: VideoWriter | None = None, label: str = "",
-                 keep_frames: bool = False):
-        if camera not in camera_names(world):
+                 camera: str, writer: VideoWriter | None = None, label: str = ""):
+        if camera not in world.camera_names():
             raise RenderError(f"--camera {camera!r} is not in the scene: choose from "
-                              f"{', '.join(camera_names(world))}")
+                              f"{', '.join(world.camera_names())}")
         self.world = world
         self.renderer = make_renderer(world, width, height)
         self.camera = camera
@@ -189,9 +193,7 @@ class FrameRecorder:
         self.writer = writer
         self.overlay = Overlay(width, height, fps=fps, label=label)
         self.peak = peak_power(world.config.constants)
-        self.frames: list[np.ndarray] = []
-        self.keep_frames = keep_frames
-        self.count = 0
+        self.last_frame: np.ndarray | None = None
 
     def __call__(self, t: float, world: LinkWorld, reading: SensorReading, xhat) -> None:
         self.overlay.push(reading.phi, float(xhat[0]), reading.power[0], reading.power[1])
@@ -202,9 +204,6 @@ class FrameRecorder:
         self.last_frame = frame
         if self.writer is not None:
             self.writer.append(frame)
-        if self.keep_frames:
-            self.frames.append(frame)
-        self.count += 1
 
     def render(self, t: float, reading: SensorReading) -> np.ndarray:
         r = self.renderer
@@ -216,7 +215,3 @@ class FrameRecorder:
 
     def close(self) -> None:
         self.renderer.close()
-
-
-def camera_names(world: LinkWorld) -> list[str]:
-    return [world.model.camera(i).name for i in range(world.model.ncam)]

@@ -1,0 +1,197 @@
+"""What each ``ledsim`` command does, one function per command (named after it).
+
+Arguments were parsed by :func:`ledsim.cli.build_parser`; errors are raised as
+:class:`~ledsim.errors.LedsimError` and printed as one line by :func:`ledsim.cli.main`.
+"""
+
+from __future__ import annotations
+
+import math
+import os
+import time
+from pathlib import Path
+
+from ..errors import LedsimError
+
+
+def _check_out_dir(path: str) -> Path:
+    """Refuse an --out that exists as a file, before any work is done."""
+    out = Path(path)
+    if out.exists() and not out.is_dir():
+        raise LedsimError(f"--out {path!r} exists and is not a folder")
+    return out
+
+
+def _writable_dir(path: str) -> Path:
+    """The --out folder, created if needed and checked writable."""
+    out = _check_out_dir(path)
+    try:
+        out.mkdir(parents=True, exist_ok=True)
+    except OSError as exc:
+        raise LedsimError(f"--out {path!r} cannot be created: {exc.strerror}") from None
+    if not os.access(out, os.W_OK):
+        raise LedsimError(f"--out {path!r} is not writable")
+    return out
+
+
+def _loop_config(args, **kw):
+    from ..loop.config import RunConfig
+
+    cfg = RunConfig(scenario=args.scenario, estimator=args.estimator,
+                    disturbances=tuple(args.disturbance), distance=args.distance,
+                    scene=args.scene, **kw)
+    cfg.validate()
+    return cfg
+
+
+def simulate(args) -> int:
+    from ..config import LinkConstants
+    from ..physics.disturbances import parse_disturbance
+    from ..physics.scene import WorldConfig
+    from ..physics.sensor import IrradianceSensor
+    from ..physics.simulation import simulate, torque_profile
+    from ..physics.world import LinkWorld
+    from ..plotting import plot_series
+
+    if not args.seconds > 0:
+        raise LedsimError(f"--seconds {args.seconds!r} is not allowed: must be > 0")
+    _check_out_dir(args.out)
+    profile = torque_profile(args.torque_profile, args.torque_amplitude,
+                             args.torque_frequency)
+    disturbances = [parse_disturbance(d) for d in args.disturbance]
+    constants = LinkConstants(distance=args.distance, dphi=math.radians(args.dphi))
+    extra = {} if args.scene is None else {"xml": Path(args.scene)}
+    world = LinkWorld(WorldConfig(constants=constants, torque_limit=args.torque_limit,
+                                  led_yaw=math.radians(args.led_yaw),
+                                  led_lateral_offset=args.led_offset, **extra))
+    world.reset(gimbal_angle=args.gimbal_angle)
+    sensor = IrradianceSensor(world, seed=args.seed)
+    t0 = time.perf_counter()
+    res = simulate(world, sensor, args.seconds, profile, disturbances, progress=True)
+    wall = time.perf_counter() - t0
+    out = _writable_dir(args.out)
+    res.save_npz(out / "series.npz")
+    res.save_csv(out / "series.csv")
+    title = f"d = {args.distance:g} m, torque {args.torque_profile}" + (
+        f", {', '.join(args.disturbance)}" if args.disturbance else "")
+    plot_series(res, out / "series.png", title)
+    print(f"simulated {args.seconds:g} s ({len(res.t)} steps) in {wall:.2f} s "
+          f"({args.seconds / wall:.0f}x real time); wrote {out}/series.npz, series.csv, "
+          "series.png")
+    return 0
+
+
+def run(args) -> int:
+    from ..loop.report import TABLE_HEADER, format_summary, run_many, write_run
+
+    cfg = _loop_config(args, torque_limit=args.torque_limit, noise_scale=args.noise_scale,
+                       seeds=args.seeds, particles=args.particles,
+                       checkpoint=args.checkpoint, omega_model=args.omega_model,
+                       workers=args.workers, seconds=args.seconds)
+    _check_out_dir(args.out)
+    summary, trace = run_many(cfg)
+    paths = write_run(summary, trace, _writable_dir(args.out), plot=not args.no_plot)
+    print(TABLE_HEADER)
+    print(format_summary(summary))
+    print(f"wrote {', '.join(str(p) for p in paths)}")
+    return 0
+
+
+def demo(args) -> int:
+    """Align the receiver from 0.3 rad off with each estimator; print one table."""
+    from observer.atomic import atomic_write_text
+
+    from ..loop.config import LOOP_ESTIMATORS, RunConfig
+    from ..loop.report import TABLE_HEADER, format_summary, run_many, write_run
+    from ..results import write_json
+
+    out = _writable_dir(args.out)
+    t0 = time.perf_counter()
+    rows, summaries = [], []
+    for est in LOOP_ESTIMATORS:
+        summary, trace = run_many(RunConfig(scenario="align", estimator=est,
+                                            seeds=args.seeds, scene=args.scene))
+        write_run(summary, trace, out / est)
+        summaries.append(summary)
+        rows.append(format_summary(summary))
+        print(rows[-1] if len(rows) > 1 else f"{TABLE_HEADER}\n{rows[-1]}", flush=True)
+    atomic_write_text(out / "table.md", TABLE_HEADER + "\n" + "\n".join(rows) + "\n")
+    write_json(out / "results.json", summaries)
+    if not args.no_video:
+        _demo_video(out, args.scene)
+    print(f"wrote {out}/table.md, results.json, <estimator>/run.png in "
+          f"{time.perf_counter() - t0:.0f} s")
+    return 0
+
+
+def _demo_video(out: Path, scene: str | None) -> None:
+    """A short video of the KKL-driven alignment with an occlusion, and a still frame."""
+    from ..loop.config import RunConfig
+    from ..loop.video import VideoSpec, check_video, render_video
+
+    cfg = RunConfig(scenario="align", estimator="kkl", seconds=5.0, scene=scene,
+                    disturbances=("occlusion:start=3,duration=0.5",))
+    check_video(cfg, VideoSpec())
+    frames = render_video(cfg, 0, out / "alignment.mp4", VideoSpec(),
+                          still=out / "alignment.png", progress=True)
+    print(f"rendered {frames} frames; wrote {out}/alignment.mp4, alignment.png")
+
+
+def render(args) -> int:
+    if args.gl and os.environ.get("MUJOCO_GL", args.gl) != args.gl:
+        raise LedsimError(f"--gl {args.gl} conflicts with MUJOCO_GL={os.environ['MUJOCO_GL']}")
+    for flag, value in (("--fps", args.fps), ("--seconds", args.seconds)):
+        if not value > 0:
+            raise LedsimError(f"{flag} {value!r} is not allowed: must be > 0")
+    out = Path(args.out)
+    if out.suffix.lower() != ".mp4":
+        raise LedsimError(f"--out {args.out!r}: the video must be an .mp4 file")
+    if not out.parent.exists() or not os.access(out.parent, os.W_OK):
+        raise LedsimError(f"--out {args.out!r}: folder {str(out.parent)!r} does not exist or "
+                          "is not writable")
+    from ..loop.video import VideoSpec, check_video, render_video
+
+    cfg = _loop_config(args, seconds=args.seconds)
+    spec = VideoSpec(args.width, args.height, args.fps, args.camera)
+    check_video(cfg, spec)
+    t0 = time.perf_counter()
+    frames = render_video(cfg, args.seed, out, spec, progress=True)
+    wall = time.perf_counter() - t0
+    print(f"rendered {frames} frames ({args.width}x{args.height}) in {wall:.1f} s "
+          f"({frames / wall:.1f} frames/s incl. physics and observer); wrote {out}")
+    return 0
+
+
+def evaluate(args) -> int:
+    from ..paper.evaluate import EvaluationConfig, evaluate, markdown_table, write_outputs
+
+    cfg = EvaluationConfig(scenario=args.scenario, distance=args.distance,
+                           dphi=math.radians(args.dphi), seeds=args.seeds,
+                           starts=args.starts, particles=args.particles,
+                           checkpoint=args.checkpoint, workers=args.workers)
+    _check_out_dir(args.out)
+    t0 = time.perf_counter()
+    result = evaluate(cfg)
+    paths = write_outputs(result, _writable_dir(args.out))
+    print(markdown_table(result))
+    print(f"wrote {', '.join(str(p) for p in paths)} in {time.perf_counter() - t0:.0f} s")
+    return 0
+
+
+def train(args) -> int:
+    from observer import checkpoint
+    from observer.training import train_kkl
+
+    from ..config import LinkConstants
+    from ..paper.model import LEDLinkModel
+    from ..presets import observer_preset
+
+    system = LEDLinkModel(LinkConstants(distance=args.distance))
+    design, config = observer_preset(args.design, system.Te)
+    config.n_samples = args.samples
+    config.seed = args.seed
+    obs, report = train_kkl(system, design, config)
+    path = checkpoint.save(obs, args.out)
+    print(f"trained {args.design} observer in {report.seconds:.1f} s: "
+          f"L_dyn={report.loss_dyn:.2e}, L_recon={report.loss_recon:.2e}; wrote {path}")
+    return 0

@@ -1,0 +1,55 @@
+"""The measurement gate in front of every estimator: occluded samples become missing.
+
+It looks only at the measurements, so every estimator (KKL, EKF, UKF, PF) gets the same
+input.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from ..config import LinkConstants
+from ..optics import peak_power
+
+
+class DropoutGate:
+    """Marks occluded samples as missing (NaN) before they reach any estimator.
+
+    A body crossing the beam cuts the light within a few milliseconds, while turning the
+    gimbal dims it smoothly. A photodiode's sample therefore counts as a dropout when it
+    falls below ``floor`` W while the recent level of that photodiode (an exponential
+    average of its accepted samples) was above twice the floor, and it stays one while
+    the power stays below the floor. Missing samples are then handled by each
+    estimator's own policy (KKL holds its prediction; Kalman and particle filters skip
+    the update). After ``max_hold`` seconds the gate gives up and passes the samples
+    again, so a lasting loss of light is seen as what it is.
+
+    Args:
+        constants: link constants (the floor defaults to 10% of the peak power).
+        floor: power below which a sample may be a dropout [W].
+        max_hold: longest dropout bridged [s].
+        smoothing: weight of a new sample in the recent level [-].
+    """
+
+    def __init__(self, constants: LinkConstants, floor: float | None = None,
+                 max_hold: float = 1.0, smoothing: float = 0.2):
+        self.floor = 0.1 * peak_power(constants) if floor is None else floor
+        self.max_steps = int(round(max_hold / constants.Te))
+        self.smoothing = smoothing
+        self.reset()
+
+    def reset(self) -> None:
+        self.held = np.zeros(2, dtype=int)
+        self.level = None
+
+    def __call__(self, y: np.ndarray) -> np.ndarray:
+        y = np.asarray(y, dtype=float)
+        if self.level is None:
+            self.level = y.copy()
+        low = y < self.floor
+        start = low & (self.held == 0) & (self.level > 2 * self.floor)
+        drop = (start | (low & (self.held > 0))) & (self.held < self.max_steps)
+        self.held = np.where(drop, self.held + 1, 0)
+        a = self.smoothing
+        self.level = np.where(drop, self.level, (1 - a) * self.level + a * y)
+        return np.where(drop, np.nan, y)

@@ -1,0 +1,124 @@
+"""Monte-Carlo over seeds of the closed loop, its summary, table row and files."""
+
+from __future__ import annotations
+
+from collections.abc import Callable
+from dataclasses import dataclass
+from pathlib import Path
+
+import numpy as np
+
+from observer.metrics import mean_and_spread
+
+from ..montecarlo import run_jobs
+from ..results import DictAccess, write_json
+from .closed_loop import RunOutcome, Trace, check_checkpoint, run_once
+from .config import RunConfig
+
+
+@dataclass
+class Stat(DictAccess):
+    """Mean and sample standard deviation over the seeds that have a value, and how
+    many did (``n``); ``mean`` is None when none did."""
+
+    mean: float | None
+    std: float | None
+    n: int
+
+    @classmethod
+    def over(cls, values) -> Stat:
+        vals = [v for v in values if v is not None]
+        if not vals:
+            return cls(None, None, 0)
+        mean, spread = mean_and_spread(np.array(vals, dtype=float))
+        return cls(float(mean), float(spread), len(vals))
+
+
+@dataclass
+class RunSummary(DictAccess):
+    """What ``ledsim run`` writes to ``results.json`` (units as in :class:`RunMetrics`)."""
+
+    scenario: str
+    estimator: str
+    disturbances: list
+    distance: float
+    noise_scale: float
+    seeds: int
+    omega_model: str
+    seconds: float
+    rmse_x1: Stat
+    rmse_x2: Stat
+    rmse_steady_x1: Stat
+    rmse_steady_x2: Stat
+    alignment_time: Stat
+    aligned_runs: int
+    availability: Stat
+    mean_power: Stat
+    recovery_time: Stat
+    us_per_step: Stat
+    realtime_factor: Stat
+
+
+def summarize(cfg: RunConfig, outs: list[RunOutcome]) -> RunSummary:
+    def stat(get: Callable[[RunOutcome], float | None]) -> Stat:
+        return Stat.over(get(o) for o in outs)
+
+    return RunSummary(
+        cfg.scenario, cfg.estimator, list(cfg.disturbances), cfg.distance, cfg.noise_scale,
+        cfg.seeds, cfg.omega_model, cfg.run_seconds,
+        rmse_x1=stat(lambda o: o.metrics.rmse["x1"]),
+        rmse_x2=stat(lambda o: o.metrics.rmse["x2"]),
+        rmse_steady_x1=stat(lambda o: o.metrics.rmse_steady["x1"]),
+        rmse_steady_x2=stat(lambda o: o.metrics.rmse_steady["x2"]),
+        alignment_time=stat(lambda o: o.metrics.alignment_time),
+        aligned_runs=sum(o.metrics.alignment_time is not None for o in outs),
+        availability=stat(lambda o: o.metrics.availability),
+        mean_power=stat(lambda o: o.metrics.mean_power),
+        recovery_time=stat(lambda o: o.metrics.recovery_time),
+        us_per_step=stat(lambda o: o.us_per_step),
+        realtime_factor=stat(lambda o: o.realtime_factor))
+
+
+def _job(args) -> RunOutcome:
+    cfg, seed, keep = args
+    return run_once(cfg, seed, keep)
+
+
+def run_many(cfg: RunConfig, progress: bool = True) -> tuple[RunSummary, Trace]:
+    """Monte-Carlo over seeds 0..cfg.seeds-1; returns (summary, trace of seed 0)."""
+    cfg.validate()
+    check_checkpoint(cfg)
+    jobs = [(cfg, seed, seed == 0) for seed in range(cfg.seeds)]
+    outs = run_jobs(_job, jobs, cfg.workers, f"{cfg.scenario}/{cfg.estimator}", progress)
+    return summarize(cfg, outs), outs[0].trace
+
+
+def write_run(summary: RunSummary, trace: Trace | None, out: Path,
+              plot: bool = True) -> list[Path]:
+    """``results.json`` and (with ``plot``) ``run.png`` in the folder ``out``."""
+    out.mkdir(parents=True, exist_ok=True)
+    paths = [write_json(out / "results.json", summary)]
+    if trace is not None and plot:
+        from ..plotting import plot_run
+
+        dist = ", ".join(summary.disturbances) or "no disturbance"
+        paths.append(plot_run(trace, f"{summary.scenario} with {summary.estimator} — {dist}",
+                              summary.estimator, out / "run.png"))
+    return paths
+
+
+TABLE_HEADER = ("| scenario | disturbance | estimator | x1 RMSE [rad] | x2 RMSE [rad/s] "
+                "| align time [s] | availability | mean P1 [W] | recovery [s] | RTF |\n"
+                "|---|---|---|---|---|---|---|---|---|---|")
+
+
+def format_summary(s: RunSummary, first_cell: str | None = None) -> str:
+    """One markdown row of :data:`TABLE_HEADER` (``first_cell``: instead of the scenario)."""
+    def f(stat: Stat, fmt="{:.2e}"):
+        return "-" if stat.mean is None else fmt.format(stat.mean)
+
+    return (f"| {first_cell or s.scenario} | {', '.join(s.disturbances) or '-'} "
+            f"| {s.estimator} | {f(s.rmse_steady_x1)} | {f(s.rmse_steady_x2)} "
+            f"| {f(s.alignment_time, '{:.2f}')} | {f(s.availability, '{:.3f}')} "
+            f"| {f(s.mean_power, '{:.3f}')} | {f(s.recovery_time, '{:.2f}')} "
+            f"| {f(s.realtime_factor, '{:.0f}')} |")

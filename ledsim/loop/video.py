@@ -1,0 +1,63 @@
+"""A closed-loop run rendered to an H.264 mp4: what ``ledsim render`` and ``ledsim demo``
+both call."""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from pathlib import Path
+
+from ..physics.render import FrameRecorder, VideoWriter
+from ..physics.world import LinkWorld
+from .closed_loop import ClosedLoop
+from .config import RunConfig
+
+
+@dataclass
+class VideoSpec:
+    """Frame size [px], frame rate [1/s] and camera of a video."""
+
+    width: int = 640
+    height: int = 480
+    fps: float = 30.0
+    camera: str = "side"
+
+
+def check_video(cfg: RunConfig, spec: VideoSpec) -> None:
+    """Size, camera and GL backend checked before any physics runs (raises RenderError)."""
+    FrameRecorder(LinkWorld(cfg.world_config()), spec.width, spec.height, spec.fps,
+                  spec.camera).close()
+
+
+def render_video(cfg: RunConfig, seed: int, out: Path, spec: VideoSpec,
+                 still: Path | None = None, progress: bool = False) -> int:
+    """Run ``cfg`` with seed ``seed`` and write its video to ``out`` (and the last frame
+    to ``still`` as PNG). Returns the number of frames. Nothing is left under ``out`` if
+    the run fails or is interrupted."""
+    label = (f"{cfg.scenario} | {cfg.estimator} | "
+             f"{', '.join(cfg.disturbances) or 'no disturbance'}")
+    writer = VideoWriter(out, spec.fps)
+    recorder: list[FrameRecorder] = []
+
+    def on_step(t, world, reading, xhat):
+        if not recorder:
+            recorder.append(FrameRecorder(world, spec.width, spec.height, spec.fps,
+                                          spec.camera, writer, label=label))
+        recorder[0](t, world, reading, xhat)
+
+    ok = False
+    try:
+        ClosedLoop(cfg, seed, on_step).run(progress=progress)
+        if still is not None and recorder and recorder[0].last_frame is not None:
+            from PIL import Image
+
+            from observer.atomic import atomic_write_bytes
+
+            frame = recorder[0].last_frame
+            atomic_write_bytes(Path(still), lambda tmp: Image.fromarray(frame).save(
+                tmp, format="PNG"))
+        ok = True
+    finally:
+        for rec in recorder:
+            rec.close()
+        writer.close(keep=ok)
+    return writer.frames

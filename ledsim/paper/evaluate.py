@@ -1,0 +1,208 @@
+"""``ledsim evaluate``: the paper's Table 1/2 experiments with KKL and the baselines.
+
+Every estimator sees exactly the same noise draws per seed (open-loop scenarios: the
+same measurement sequences). The runs go through the shared Monte-Carlo runner.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, field
+from pathlib import Path
+
+import numpy as np
+
+from observer.atomic import atomic_write_text
+from observer.metrics import converged, mean_and_spread, rmse
+
+from ..config import LinkConstants
+from ..errors import LedsimError
+from ..estimators import build_estimator
+from ..montecarlo import run_jobs
+from ..resources import require_shipped_checkpoint, shipped_checkpoint
+from ..results import DictAccess, write_json
+from .model import LEDLinkModel
+from .scenarios import PAPER_TABLE1, PAPER_TABLE2, Noise, Trajectory, get_scenario, run
+
+CONVERGENCE_TOLERANCE = 0.02  # rad: steady-state x1 RMSE below this counts as converged
+KEYS = ("x1", "x2", "y1", "y2")
+#: Random initial guesses of the convergence share are drawn from this seed.
+STARTS_SEED = 12345
+
+
+def default_checkpoint(distance: float, design: str = "default") -> Path:
+    """The shipped closed-form checkpoint for a link distance [m]."""
+    return shipped_checkpoint(distance, "closed-form", design)
+
+
+@dataclass
+class EvaluationConfig:
+    """One ``ledsim evaluate``: scenario, link, Monte-Carlo size and estimators."""
+
+    scenario: str = "open-loop"
+    distance: float = 0.085  # m
+    dphi: float = LinkConstants().dphi  # rad
+    seeds: int = 10
+    starts: int = 100  # random initial guesses for the convergence share
+    particles: int = 5000
+    checkpoint: str | None = None
+    workers: int = 2
+    estimators: tuple[str, ...] = ("kkl", "kkl-paper", "ekf", "ukf", "pf")
+
+    def validate(self) -> None:
+        get_scenario(self.scenario)
+        checks = [("--distance", self.distance, self.distance > 0, "> 0 m"),
+                  ("--seeds", self.seeds, self.seeds >= 1, ">= 1"),
+                  ("--starts", self.starts, self.starts >= 0, ">= 0"),
+                  ("--particles", self.particles, self.particles >= 1, ">= 1")]
+        for flag, value, ok, allowed in checks:
+            if not (ok and math.isfinite(value)):
+                raise LedsimError(f"{flag} {value!r} is not allowed: must be {allowed}")
+        if self.dphi == 0:
+            raise LedsimError("--dphi 0 is not allowed: the two photodiodes must point in "
+                              "different directions")
+
+
+@dataclass
+class EstimatorResult(DictAccess):
+    """Monte-Carlo statistics of one estimator (RMSE keyed by x1, x2, y1, y2)."""
+
+    rmse: dict
+    rmse_std: dict
+    rmse_steady: dict
+    rmse_steady_std: dict
+    converged_fraction: float | None
+    us_per_step: float
+
+
+@dataclass
+class EvaluationResult(DictAccess):
+    """What ``ledsim evaluate`` writes to ``results.json`` (``traces``: seed 0, not saved)."""
+
+    scenario: str
+    distance: float
+    seeds: int
+    starts: int
+    n_steps: int
+    steady_from: int  # first step of the steady-state window
+    Te: float
+    estimators: dict[str, EstimatorResult]
+    paper: dict | None
+    traces: dict[str, Trajectory] = field(default_factory=dict, metadata={"json": False})
+
+
+def _estimator_names(cfg: EvaluationConfig, distance: float) -> list[str]:
+    """``kkl-paper`` only when its checkpoint is shipped and no custom KKL is given."""
+    return [n for n in cfg.estimators if n != "kkl-paper" or (
+        cfg.checkpoint is None and default_checkpoint(distance, "paper").is_file())]
+
+
+def _checkpoint(name: str, cfg: EvaluationConfig, distance: float):
+    if name == "kkl":
+        return cfg.checkpoint or require_shipped_checkpoint(distance)
+    if name == "kkl-paper":
+        return default_checkpoint(distance, "paper")
+    return None
+
+
+def _job(args):
+    system, scenario, est, seed, x0_guess, keep = args
+    est.seed_run(seed)
+    out = run(system, scenario, est, Noise.draw(system, scenario.n_steps(system.Te), seed),
+              x0_guess)
+    s = scenario.steady_step(system.Te)
+    metrics = {
+        "rmse": np.r_[rmse(out.xhat, out.x), rmse(out.yhat, out.y_clean)],
+        "rmse_steady": np.r_[rmse(out.xhat, out.x, s), rmse(out.yhat, out.y_clean, s)],
+        "converged": converged(out.xhat, out.x, s, CONVERGENCE_TOLERANCE),
+        "us_per_step": 1e6 * out.seconds / len(out.x),
+    }
+    return metrics, (out if keep else None)
+
+
+def _summarise(seed_metrics: list[dict], start_metrics: list[dict]) -> EstimatorResult:
+    stats = {}
+    for key in ("rmse", "rmse_steady"):
+        mean, spread = mean_and_spread([m[key] for m in seed_metrics])
+        stats[key] = dict(zip(KEYS, mean.tolist(), strict=True))
+        stats[key + "_std"] = dict(zip(KEYS, spread.tolist(), strict=True))
+    conv = (float(np.mean([m["converged"] for m in start_metrics])) if start_metrics
+            else None)
+    return EstimatorResult(**stats, converged_fraction=conv, us_per_step=float(
+        np.median([m["us_per_step"] for m in seed_metrics])))
+
+
+def evaluate(cfg: EvaluationConfig, constants: LinkConstants | None = None,
+             progress: bool = True) -> EvaluationResult:
+    """Run the Monte-Carlo comparison of ``cfg``."""
+    cfg.validate()
+    base = constants or LinkConstants()
+    system = LEDLinkModel(base.with_(distance=cfg.distance, dphi=cfg.dphi))
+    scenario = get_scenario(cfg.scenario)
+    names = _estimator_names(cfg, cfg.distance)
+    ests = {n: build_estimator(n, system, checkpoint=_checkpoint(n, cfg, cfg.distance),
+                               particles=cfg.particles) for n in names}
+    starts = system.sample_domain(np.random.default_rng(STARTS_SEED), cfg.starts)
+    jobs = []  # per estimator: its seeds, then its random starts
+    for est in ests.values():
+        jobs += [(system, scenario, est, seed, None, seed == 0) for seed in range(cfg.seeds)]
+        jobs += [(system, scenario, est, 1000 + i, starts[i], False) for i in range(cfg.starts)]
+    outputs = run_jobs(_job, jobs, cfg.workers, f"{cfg.scenario} d={cfg.distance:g}",
+                       progress)
+    result = EvaluationResult(
+        cfg.scenario, cfg.distance, cfg.seeds, cfg.starts, scenario.n_steps(system.Te),
+        scenario.steady_step(system.Te), system.Te, {}, paper_reference(cfg.scenario,
+                                                                        cfg.distance))
+    i = 0
+    for n in ests:
+        seed_out = outputs[i:i + cfg.seeds]
+        start_out = outputs[i + cfg.seeds:i + cfg.seeds + cfg.starts]
+        i += cfg.seeds + cfg.starts
+        result.estimators[n] = _summarise([m for m, _ in seed_out], [m for m, _ in start_out])
+        result.traces[n] = seed_out[0][1]
+    return result
+
+
+def paper_reference(scenario: str, distance: float) -> dict | None:
+    """The paper's RMSE for this case: Table 1 at d0 = 0.085 m, else Table 2, else None."""
+    if np.isclose(distance, 0.085) and scenario in PAPER_TABLE1:
+        row, source = PAPER_TABLE1[scenario], "Table 1"
+    elif (scenario, distance) in PAPER_TABLE2:
+        row, source = PAPER_TABLE2[(scenario, distance)], "Table 2"
+    else:
+        return None
+    return {**dict(zip(KEYS, row, strict=True)), "source": source}
+
+
+def markdown_table(result: EvaluationResult) -> str:
+    """RMSE table (mean +- std over seeds) beside the paper's value."""
+    lines = [f"### {result.scenario}, d = {result.distance:g} m, "
+             f"{result.seeds} seeds (steady state from step {result.steady_from} "
+             f"of {result.n_steps})", "",
+             "| estimator | x1 [rad] | x2 [rad/s] | y1 [W] | y2 [W] | x1 whole run [rad] "
+             "| converged | us/step |",
+             "|---|---|---|---|---|---|---|---|"]
+    for name, e in result.estimators.items():
+        cells = [f"{e.rmse_steady[k]:.2e} ± {e.rmse_steady_std[k]:.1e}" for k in KEYS]
+        conv = "-" if e.converged_fraction is None else f"{100 * e.converged_fraction:.0f}%"
+        lines.append(f"| {name} | " + " | ".join(cells) +
+                     f" | {e.rmse['x1']:.2e} | {conv} | {e.us_per_step:.1f} |")
+    if result.paper:
+        p = result.paper
+        lines.append(f"| paper ({p['source']}) | " + " | ".join(f"{p[k]:.2e}" for k in KEYS)
+                     + " | | | |")
+    return "\n".join(lines) + "\n"
+
+
+def write_outputs(result: EvaluationResult, out_dir: Path) -> list[Path]:
+    """results.json, table.md and the figures; each written atomically."""
+    from ..plotting import plot_estimates, plot_powers
+
+    out_dir = Path(out_dir)
+    out_dir.mkdir(parents=True, exist_ok=True)
+    title = f"{result.scenario}, d = {result.distance:g} m"
+    paths = [plot_estimates(result.traces, result.Te, title, out_dir / "states.png"),
+             plot_powers(result.traces, result.Te, title, out_dir / "powers.png")]
+    atomic_write_text(out_dir / "table.md", markdown_table(result))
+    write_json(out_dir / "results.json", result)
+    return [out_dir / "results.json", out_dir / "table.md", *paths]

@@ -1,0 +1,154 @@
+"""The scene: every knob of the MuJoCo world, applied to the MJCF through ``mujoco.MjSpec``.
+
+The MJCF file ``led_link.xml`` sits beside this module (package data). :func:`build_spec`
+loads it, checks the names the code relies on, and applies a :class:`WorldConfig`
+(link distance, photodiode offset, LED pose, hull mass, water, torque limit): no XML
+templating.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, field
+from pathlib import Path
+
+import mujoco
+import numpy as np
+
+from ..config import ConfigError, LinkConstants
+from ..errors import LedsimError
+from ..resources import scene_path
+
+#: Former module-level name of the default scene.
+SCENE = scene_path()
+
+
+class WorldError(LedsimError):
+    """The scene cannot be built as asked (bad file, name, or geometry)."""
+
+
+@dataclass(frozen=True)
+class WorldConfig:
+    """Every knob of the MuJoCo world (SI units).
+
+    Attributes:
+        constants: optics and dynamics constants shared with the observer's model;
+            ``constants.distance`` is the LED-receiver distance and ``constants.dphi``
+            the angle between the photodiode normals.
+        xml: scene file.
+        led_lateral_offset: LED displacement across the link (world y) [m].
+        led_yaw: rotation of the LED axis about world z away from the receiver [rad];
+            sets the emission angle theta.
+        hull_mass: AUV hull mass [kg]; None = neutrally buoyant (mass of displaced water).
+        water_density: fluid density [kg/m^3] (0: in air, no fluid forces).
+        water_viscosity: dynamic viscosity [Pa s].
+        torque_limit: gimbal motor torque limit [N m].
+        gimbal_damping: hinge bearing damping [N m s/rad].
+        timestep: physics step [s]; ``constants.Te`` must be a multiple of it.
+        n_rays: rays per photodiode over the LED aperture (1 = centre only).
+        aperture_radius: radius of the LED's emitting aperture [m].
+    """
+
+    constants: LinkConstants = field(default_factory=LinkConstants)
+    xml: Path = field(default_factory=scene_path)
+    led_lateral_offset: float = 0.0
+    led_yaw: float = 0.0
+    hull_mass: float | None = None
+    water_density: float = 1000.0
+    water_viscosity: float = 0.00089
+    torque_limit: float = 0.05
+    gimbal_damping: float = 1e-4
+    timestep: float = 0.002
+    n_rays: int = 5
+    aperture_radius: float = 0.003
+
+    def __post_init__(self):
+        checks = [
+            ("torque_limit", self.torque_limit, self.torque_limit > 0, "> 0 N m"),
+            ("water_density", self.water_density, self.water_density >= 0, ">= 0 kg/m^3"),
+            ("water_viscosity", self.water_viscosity, self.water_viscosity >= 0, ">= 0 Pa s"),
+            ("gimbal_damping", self.gimbal_damping, self.gimbal_damping >= 0, ">= 0 N m s/rad"),
+            ("timestep", self.timestep, 0 < self.timestep <= self.constants.Te,
+             f"in (0, Te={self.constants.Te}] s"),
+            ("n_rays", self.n_rays, self.n_rays >= 1, ">= 1"),
+            ("aperture_radius", self.aperture_radius, self.aperture_radius >= 0, ">= 0 m"),
+        ]
+        if self.hull_mass is not None:
+            checks.append(("hull_mass", self.hull_mass, self.hull_mass > 0, "> 0 kg"))
+        for name, value, ok, allowed in checks:
+            if not (ok and math.isfinite(value)):
+                raise ConfigError(f"{name}={value!r} is not allowed: must be {allowed}")
+        ratio = self.constants.Te / self.timestep
+        if abs(ratio - round(ratio)) > 1e-9:
+            raise ConfigError(f"timestep={self.timestep!r} is not allowed: Te="
+                              f"{self.constants.Te} must be a whole multiple of it")
+
+    @property
+    def substeps(self) -> int:
+        return round(self.constants.Te / self.timestep)
+
+
+def _rotate_z(v, angle):
+    c, s = math.cos(angle), math.sin(angle)
+    return [c * v[0] - s * v[1], s * v[0] + c * v[1], v[2]]
+
+
+def _set_zaxis(element, direction) -> None:
+    """Orient an MjSpec site/geom so its z axis is ``direction`` (overrides the XML's)."""
+    element.alt.type = mujoco.mjtOrientation.mjORIENTATION_ZAXIS
+    element.alt.zaxis = list(direction)
+
+
+def _set_yaw(element, angle: float) -> None:
+    element.alt.type = mujoco.mjtOrientation.mjORIENTATION_QUAT
+    element.quat = [math.cos(angle / 2), 0.0, 0.0, math.sin(angle / 2)]
+
+
+def build_spec(config: WorldConfig) -> mujoco.MjSpec:
+    """Load the scene and apply ``config`` through MjSpec (no XML templating)."""
+    path = Path(config.xml)
+    if not path.is_file():
+        raise WorldError(f"scene file {str(path)!r} does not exist")
+    try:
+        spec = mujoco.MjSpec.from_file(str(path))
+    except Exception as exc:  # mujoco raises ValueError with the parser message
+        first = str(exc).strip().splitlines()[0] if str(exc).strip() else type(exc).__name__
+        raise WorldError(f"scene file {str(path)!r} is not valid MJCF: {first}") from None
+    for kind, name in [("body", "auv"), ("body", "gimbal"), ("body", "transmitter"),
+                       ("body", "occluder"), ("site", "pd1"), ("site", "pd2"),
+                       ("site", "led"), ("joint", "gimbal_hinge"),
+                       ("actuator", "gimbal_motor"), ("geom", "hull")]:
+        if getattr(spec, kind)(name) is None:
+            raise WorldError(f"scene file {str(path)!r} has no {kind} named {name!r}")
+    c = config.constants
+    spec.option.timestep = config.timestep
+    spec.option.density = config.water_density
+    spec.option.viscosity = config.water_viscosity
+
+    # Photodiode 2's normal is photodiode 1's turned by -dphi about the hinge axis, so
+    # its incidence angle is phi + dphi (paper eq. eq-4a).
+    pd1, pd2 = spec.site("pd1"), spec.site("pd2")
+    normal2 = _rotate_z([1.0, 0.0, 0.0], -c.dphi)
+    _set_zaxis(pd2, normal2)
+    lens2 = spec.geom("pd2_lens")
+    if lens2 is not None:
+        _set_zaxis(lens2, normal2)
+
+    # LED at distance d in front of the receiver centre (midpoint of the photodiodes).
+    gimbal = spec.body("gimbal")
+    centre_local = 0.5 * (np.asarray(pd1.pos) + np.asarray(pd2.pos))
+    centre = np.asarray(gimbal.pos) + centre_local
+    tx = spec.body("transmitter")
+    tx.pos = [centre[0] + c.distance, centre[1] + config.led_lateral_offset, centre[2]]
+    _set_yaw(tx, config.led_yaw)
+
+    hinge = spec.joint("gimbal_hinge")
+    hinge.damping = [config.gimbal_damping, 0.0, 0.0]  # MuJoCo 4: damping polynomial
+    motor = spec.actuator("gimbal_motor")
+    motor.ctrlrange = [-config.torque_limit, config.torque_limit]
+    motor.forcerange = [-config.torque_limit, config.torque_limit]
+    motor.forcelimited = mujoco.mjtLimited.mjLIMITED_TRUE
+    motor.ctrllimited = mujoco.mjtLimited.mjLIMITED_TRUE
+    if config.hull_mass is not None:
+        spec.geom("hull").mass = config.hull_mass
+    return spec

@@ -1,0 +1,255 @@
+"""The MuJoCo world: an AUV with a receiver gimbal, an LED transmitter and an occluder.
+
+:class:`LinkWorld` compiles the scene (:mod:`ledsim.physics.scene`) and is the only
+code that touches MuJoCo's ids and arrays: the sensor, the disturbances, the loop and the
+renderer use the named methods below.
+
+=======================  ==========================================  ===========
+accessor                 meaning                                     unit
+=======================  ==========================================  ===========
+gimbal_angle, _rate      hinge angle q of the receiver gimbal, dq/dt  rad, rad/s
+torque, set_torque       gimbal motor torque (clipped at the limit)  N m
+photodiode_pos(i)        position of photodiode i (0 or 1)           m
+photodiode_normal(i)     unit normal of photodiode i                 -
+photodiode_velocity(i)   (angular, linear) velocity of photodiode i  rad/s, m/s
+led_pos, led_rotation    LED position and orientation (z: its axis)  m, -
+hinge_axis               the gimbal's rotation axis                  -
+hull_pos, hull_yaw       AUV position and heading                    m, rad
+hull_velocity            (angular, linear) velocity of the hull      rad/s, m/s
+add_hull_wrench          force and torque on the hull this step      N, N m
+set_current              water velocity (MuJoCo's medium velocity)   m/s
+set_transmitter          LED platform pose and velocity              m, rad, m/s
+set_occluder             occluder plate position                     m
+cast_rays                where rays from a point are stopped          m
+=======================  ==========================================  ===========
+"""
+
+from __future__ import annotations
+
+import math
+from contextlib import contextmanager
+
+import mujoco
+import numpy as np
+
+from .scene import SCENE, WorldConfig, WorldError, build_spec
+
+__all__ = ["LinkWorld", "WorldConfig", "WorldError", "SCENE"]
+
+RAY_GROUPS = np.array([1, 1, 1, 0, 0, 0], dtype=np.uint8)  # groups 0-2 block light
+
+
+class LinkWorld:
+    """The compiled scene plus named accessors; see the module docstring."""
+
+    def __init__(self, config: WorldConfig | None = None):
+        self.config = config or WorldConfig()
+        self.spec = build_spec(self.config)
+        try:
+            self.model = self.spec.compile()
+        except Exception as exc:
+            raise WorldError(f"scene does not compile: {str(exc).strip().splitlines()[0]}") \
+                from None
+        self.data = mujoco.MjData(self.model)
+        m = self.model
+        self._auv = m.body("auv").id
+        self._gimbal = m.body("gimbal").id
+        self._tx_mocap = m.body_mocapid[m.body("transmitter").id]
+        self._occluder_mocap = m.body_mocapid[m.body("occluder").id]
+        self._pd = (m.site("pd1").id, m.site("pd2").id)
+        self._led = m.site("led").id
+        hinge = m.joint("gimbal_hinge")
+        self._hinge_qpos = hinge.qposadr[0]
+        self._hinge_dof = hinge.dofadr[0]
+        self._motor = m.actuator("gimbal_motor").id
+        self._set_hull_buoyancy()
+        self.transmitter_home = self.data.mocap_pos[self._tx_mocap].copy()
+        self.occluder_home = self.data.mocap_pos[self._occluder_mocap].copy()
+        self.occluder_half_size = float(m.geom("occluder_plate").size[2])  # m
+        self.transmitter_velocity = np.zeros(3)  # set by disturbances that move it
+        self._ray_buffers: dict[int, tuple[np.ndarray, np.ndarray]] = {}
+        mujoco.mj_forward(m, self.data)
+        self.initial_hull_pos = self.data.xpos[self._auv].copy()
+
+    def _set_hull_buoyancy(self) -> None:
+        """Buoyancy = displaced water weight: gravcomp = rho V / m for the hull body."""
+        m = self.model
+        rho = self.config.water_density
+        volume = 0.0
+        for g in np.flatnonzero(m.geom_bodyid == self._auv):
+            size = m.geom_size[g]
+            if m.geom_type[g] == mujoco.mjtGeom.mjGEOM_ELLIPSOID:
+                volume += 4.0 / 3.0 * math.pi * float(np.prod(size))
+            elif m.geom_type[g] == mujoco.mjtGeom.mjGEOM_BOX:
+                volume += 8.0 * float(np.prod(size))
+        m.body_gravcomp[self._auv] = rho * volume / m.body_mass[self._auv]
+        m.body_gravcomp[self._gimbal] = 1.0 if rho > 0 else 0.0
+
+    # -- state and stepping ----------------------------------------------------------------
+
+    def reset(self, gimbal_angle: float = 0.0, gimbal_rate: float = 0.0) -> None:
+        """Back to the initial pose with the given gimbal state [rad, rad/s]."""
+        mujoco.mj_resetData(self.model, self.data)
+        self.data.qpos[self._hinge_qpos] = gimbal_angle
+        self.data.qvel[self._hinge_dof] = gimbal_rate
+        self.data.mocap_pos[self._tx_mocap] = self.transmitter_home
+        self.data.mocap_pos[self._occluder_mocap] = self.occluder_home
+        self.transmitter_velocity[:] = 0
+        self.model.opt.wind[:] = 0
+        mujoco.mj_forward(self.model, self.data)
+
+    def step(self, n: int | None = None) -> None:
+        """Advance ``n`` physics steps (default: one control period Te)."""
+        mujoco.mj_step(self.model, self.data, nstep=n or self.config.substeps)
+
+    def forward_kinematics(self) -> None:
+        """Poses and velocities of every body and site from the current qpos, qvel and
+        mocap poses (what the sensor reads), without computing forces."""
+        m, d = self.model, self.data
+        mujoco.mj_kinematics(m, d)
+        mujoco.mj_comPos(m, d)
+        mujoco.mj_comVel(m, d)
+
+    @property
+    def time(self) -> float:
+        return float(self.data.time)
+
+    @property
+    def gimbal_angle(self) -> float:
+        return float(self.data.qpos[self._hinge_qpos])
+
+    @property
+    def gimbal_rate(self) -> float:
+        return float(self.data.qvel[self._hinge_dof])
+
+    @property
+    def torque(self) -> float:
+        return float(self.data.ctrl[self._motor])
+
+    def set_torque(self, torque: float) -> float:
+        """Command the gimbal motor; clipped to the torque limit. Returns what was applied."""
+        lim = self.config.torque_limit
+        applied = min(max(float(torque), -lim), lim)
+        self.data.ctrl[self._motor] = applied
+        return applied
+
+    def hinge_inertia(self) -> float:
+        """Gimbal inertia about its hinge incl. armature [kg m^2] (MuJoCo's mass matrix)."""
+        mujoco.mj_forward(self.model, self.data)
+        M = np.zeros((self.model.nv, self.model.nv))
+        mujoco.mj_fullM(self.model, self.data, M)
+        return float(M[self._hinge_dof, self._hinge_dof])
+
+    # -- geometry -----------------------------------------------------------------------
+
+    def photodiode_pos(self, i: int) -> np.ndarray:
+        return self.data.site_xpos[self._pd[i]]
+
+    def photodiode_normal(self, i: int) -> np.ndarray:
+        return self.data.site_xmat[self._pd[i]].reshape(3, 3)[:, 2]
+
+    def photodiode_velocity(self, i: int) -> np.ndarray:
+        """(angular, linear) velocity of photodiode i in the world frame, shape (6,)."""
+        res = np.zeros(6)
+        mujoco.mj_objectVelocity(self.model, self.data, mujoco.mjtObj.mjOBJ_SITE,
+                                 self._pd[i], res, 0)
+        return res
+
+    @property
+    def led_pos(self) -> np.ndarray:
+        return self.data.site_xpos[self._led]
+
+    @property
+    def led_rotation(self) -> np.ndarray:
+        """LED frame as a 3x3 rotation matrix; its z column is the emission axis."""
+        return self.data.site_xmat[self._led].reshape(3, 3)
+
+    @property
+    def hinge_axis(self) -> np.ndarray:
+        return self.data.xmat[self._gimbal].reshape(3, 3)[:, 2]
+
+    def link_midpoint(self) -> np.ndarray:
+        """Middle of the line of sight between the receiver centre and the LED."""
+        centre = 0.5 * (self.photodiode_pos(0) + self.photodiode_pos(1))
+        return 0.5 * (centre + self.led_pos)
+
+    def cast_rays(self, origin: np.ndarray, directions: np.ndarray,
+                  max_length: float) -> np.ndarray:
+        """Distance along each unit direction to the first light-blocking geom [m];
+        -1 where nothing is hit within ``max_length``. The gimbal's own body and the
+        optics (geom group 3) are ignored."""
+        n = len(directions)
+        if n not in self._ray_buffers:  # mj_multiRay wants outputs of exactly n entries
+            self._ray_buffers[n] = (np.zeros(n, dtype=np.int32), np.zeros(n))
+        geom, dist = self._ray_buffers[n]
+        mujoco.mj_multiRay(self.model, self.data, origin, directions.ravel(), RAY_GROUPS, 1,
+                           self._gimbal, geom, dist, None, n, max_length)
+        return dist
+
+    # -- the hull --------------------------------------------------------------------------
+
+    @property
+    def hull_pos(self) -> np.ndarray:
+        return self.data.xpos[self._auv]
+
+    @property
+    def hull_yaw(self) -> float:
+        """Heading of the AUV about world z [rad]."""
+        R = self.data.xmat[self._auv]
+        return math.atan2(R[3], R[0])
+
+    def hull_velocity(self) -> np.ndarray:
+        """(angular, linear) velocity of the hull in the world frame, shape (6,)."""
+        res = np.zeros(6)
+        mujoco.mj_objectVelocity(self.model, self.data, mujoco.mjtObj.mjOBJ_BODY, self._auv,
+                                 res, 0)
+        return res
+
+    def clear_hull_wrench(self) -> None:
+        """Remove the external force and torque on the hull (start of a control step)."""
+        self.data.xfrc_applied[self._auv] = 0.0
+
+    def add_hull_wrench(self, force=(0.0, 0.0, 0.0), torque=(0.0, 0.0, 0.0)) -> None:
+        """Add a force [N] and torque [N m] (world frame, at the hull's centre of mass)."""
+        xfrc = self.data.xfrc_applied[self._auv]
+        xfrc[:3] += force
+        xfrc[3:] += torque
+
+    def set_hull_buoyancy(self, fraction: float) -> None:
+        """Share of the hull's weight carried by buoyancy (1: neutrally buoyant) [-]."""
+        self.model.body_gravcomp[self._auv] = fraction
+
+    # -- water and the other bodies --------------------------------------------------------
+
+    def set_current(self, velocity) -> None:
+        """Velocity of the water [m/s] (MuJoCo's medium velocity, felt by fluid forces)."""
+        self.model.opt.wind[:] = velocity
+
+    def set_transmitter(self, pos, velocity=(0.0, 0.0, 0.0), yaw: float | None = None) -> None:
+        """Move the LED platform to ``pos`` [m], moving at ``velocity`` [m/s]; ``yaw``
+        [rad] turns it about world z (None: leave its heading)."""
+        self.data.mocap_pos[self._tx_mocap] = pos
+        self.transmitter_velocity[:] = velocity
+        if yaw is not None:
+            self.data.mocap_quat[self._tx_mocap] = [math.cos(yaw / 2), 0.0, 0.0,
+                                                    math.sin(yaw / 2)]
+
+    def set_occluder(self, pos) -> None:
+        """Move the occluder plate's centre to ``pos`` [m]."""
+        self.data.mocap_pos[self._occluder_mocap] = pos
+
+    @contextmanager
+    def parked_occluder(self):
+        """The occluder at its parking place for the duration of the block (kinematics
+        updated on entry and exit)."""
+        where = self.data.mocap_pos[self._occluder_mocap].copy()
+        self.set_occluder(self.occluder_home)
+        mujoco.mj_kinematics(self.model, self.data)
+        try:
+            yield
+        finally:
+            self.set_occluder(where)
+            mujoco.mj_kinematics(self.model, self.data)
+
+    def camera_names(self) -> list[str]:
+        return [self.model.camera(i).name for i in range(self.model.ncam)]

@@ -1,0 +1,51 @@
+"""Files shipped inside the package (package data), found through importlib.resources.
+
+The MJCF scene sits beside the code that loads it (``ledsim/physics/led_link.xml``); the
+trained observers are in ``ledsim/assets/checkpoints``. Nothing is found relative to a
+checkout, so an installed wheel works from any directory.
+"""
+
+from __future__ import annotations
+
+from importlib.resources import files
+from pathlib import Path
+
+from .errors import LedsimError
+
+
+def scene_path() -> Path:
+    """The default MJCF scene of the link."""
+    return Path(str(files("ledsim.physics") / "led_link.xml"))
+
+
+def checkpoint_dir() -> Path:
+    """Folder of the shipped KKL checkpoints."""
+    return Path(str(files("ledsim") / "assets" / "checkpoints"))
+
+
+def shipped_checkpoint(distance: float, world: str = "closed-form",
+                       design: str = "default") -> Path:
+    """Path of the shipped observer for a link distance [m].
+
+    Args:
+        distance: link distance d [m].
+        world: ``"closed-form"`` (trained on the paper's model) or ``"mujoco"``
+            (trained on transitions of the MuJoCo world).
+        design: ``"default"`` or ``"paper"`` (closed-form only).
+    """
+    prefix = {"closed-form": {"default": "kkl", "paper": "kkl_paper"},
+              "mujoco": {"default": "kkl_mujoco"}}[world][design]
+    return checkpoint_dir() / f"{prefix}_d{distance:g}.pt"
+
+
+def require_shipped_checkpoint(distance: float, world: str = "closed-form",
+                               design: str = "default") -> Path:
+    """:func:`shipped_checkpoint`, or a :class:`LedsimError` that says how to train one."""
+    path = shipped_checkpoint(distance, world, design)
+    if not path.is_file():
+        how = (f"`ledsim train --distance {distance:g} --out PATH`" if world == "closed-form"
+               else f"`python scripts/train_mujoco.py --distances {distance:g}`")
+        kind = "checkpoint" if world == "closed-form" else "MuJoCo observer"
+        raise LedsimError(f"no shipped {kind} for distance {distance:g} m: train one with "
+                          f"{how} and pass --checkpoint PATH")
+    return path
