@@ -11,10 +11,18 @@ from ledsim.config import LinkConstants  # noqa: E402
 from ledsim.paper.model import LEDLinkModel  # noqa: E402
 
 
-def run_cli(*args):
+def run_cli(*args, env=None, cwd=None):
     """Run ``python -m ledsim.cli ARGS`` as a user would; returns the CompletedProcess."""
     return subprocess.run([sys.executable, "-m", "ledsim.cli", *args], capture_output=True,
-                          text=True, timeout=600)
+                          text=True, timeout=600, env=env, cwd=cwd)
+
+
+def assert_user_error(r, needle: str) -> None:
+    """A user mistake: exit 2, one line on stderr naming ``needle``, no traceback."""
+    assert r.returncode == 2, r.stderr
+    assert needle in r.stderr, r.stderr
+    assert len(r.stderr.strip().splitlines()) == 1, r.stderr
+    assert "Traceback" not in r.stderr
 
 
 @pytest.fixture(scope="session")

@@ -1,3 +1,5 @@
+import copy
+
 import numpy as np
 import pytest
 
@@ -22,8 +24,12 @@ def test_filters_skip_missing_measurements(system, make):
     x_before = est.update(np.array([np.nan, np.nan]))
     np.testing.assert_allclose(x_before, system.domain_center, atol=0.05)
     est.predict(0.0)
-    x = est.update(np.array([np.nan, 0.9]))
+    twin = copy.deepcopy(est)
+    x_pred = twin.update(np.array([np.nan, np.nan]))  # nothing measured: the prediction
+    x = est.update(np.array([np.nan, 0.9]))  # photodiode 2 only
     assert np.all(np.isfinite(x))
+    # The one finite power was used: the estimate left the prediction.
+    assert np.linalg.norm(x - x_pred) > 1e-3
 
 
 def test_convergence_flag_separates_locked_from_tracking_estimates():

@@ -1,19 +1,103 @@
-"""Architecture rule: estimation (observer/) never depends on the physical world (ledsim/)."""
+"""The architecture, pinned: which package may import which, and module size.
+
+    observer/        estimation; imports nothing of ledsim
+    ledsim/paper     the closed-form world; never mujoco, never physics or loop
+    ledsim/physics   the MuJoCo world; never loop, paper or cli
+    ledsim/loop      the closed loop; never paper or cli
+    ledsim/*.py      shared pieces; never a subpackage (the CLI excepted)
+"""
 
 import ast
+import subprocess
+import sys
 from pathlib import Path
 
+import pytest
+
 ROOT = Path(__file__).resolve().parent.parent
+SHARED_MAY_IMPORT = {"ledsim.cli": None}  # the CLI wires everything together
+
+FORBIDDEN = {
+    "observer": ("ledsim",),
+    "ledsim.paper": ("mujoco", "ledsim.physics", "ledsim.loop", "ledsim.cli"),
+    "ledsim.physics": ("ledsim.loop", "ledsim.paper", "ledsim.cli"),
+    "ledsim.loop": ("ledsim.paper", "ledsim.cli"),
+    "ledsim": ("ledsim.physics", "ledsim.loop", "ledsim.paper", "ledsim.cli", "mujoco"),
+}
 
 
-def test_observer_never_imports_ledsim():
-    offenders = []
-    for path in (ROOT / "observer").rglob("*.py"):
-        for node in ast.walk(ast.parse(path.read_text())):
-            names = []
-            if isinstance(node, ast.Import):
-                names = [a.name for a in node.names]
-            elif isinstance(node, ast.ImportFrom) and node.module and node.level == 0:
-                names = [node.module]
-            offenders += [f"{path.name}: {n}" for n in names if n.split(".")[0] == "ledsim"]
-    assert not offenders, offenders
+def module_name(path: Path) -> str:
+    parts = list(path.relative_to(ROOT).with_suffix("").parts)
+    return ".".join(parts[:-1] if parts[-1] == "__init__" else parts)
+
+
+def imports_of(path: Path, module: str | None = None) -> set[str]:
+    """Absolute names of the modules that ``path`` imports (relative imports resolved)."""
+    package = (module or module_name(path)).split(".")
+    if path.name != "__init__.py":
+        package = package[:-1]
+    found = set()
+    for node in ast.walk(ast.parse(path.read_text())):
+        if isinstance(node, ast.Import):
+            found |= {a.name for a in node.names}
+        elif isinstance(node, ast.ImportFrom):
+            base = package[:len(package) - node.level + 1] if node.level else []
+            mod = ".".join(base + ([node.module] if node.module else []))
+            found.add(mod)
+            found |= {f"{mod}.{a.name}" for a in node.names}
+    return found
+
+
+def rule_for(module: str) -> tuple[str, tuple[str, ...]]:
+    """The most specific rule of FORBIDDEN that applies to ``module``."""
+    if module.startswith("ledsim.") and module.count(".") >= 1:
+        sub = ".".join(module.split(".")[:2])
+        if sub in FORBIDDEN:
+            return sub, FORBIDDEN[sub]
+        if sub in SHARED_MAY_IMPORT or sub == "ledsim.__main__":
+            return sub, ()
+        return "ledsim", FORBIDDEN["ledsim"]
+    if module == "ledsim":
+        return "ledsim", ("ledsim.physics", "ledsim.loop", "ledsim.cli", "mujoco")
+    return module.split(".")[0], FORBIDDEN.get(module.split(".")[0], ())
+
+
+def sources():
+    for pkg in ("ledsim", "observer"):
+        yield from sorted((ROOT / pkg).rglob("*.py"))
+
+
+@pytest.mark.parametrize("path", list(sources()), ids=lambda p: str(p.relative_to(ROOT)))
+def test_import_rules(path):
+    rule, forbidden = rule_for(module_name(path))
+    bad = sorted(n for n in imports_of(path)
+                 if any(n == f or n.startswith(f + ".") for f in forbidden))
+    assert not bad, f"{module_name(path)} ({rule}) imports {bad}"
+
+
+@pytest.mark.parametrize("path", list(sources()), ids=lambda p: str(p.relative_to(ROOT)))
+def test_no_module_over_300_lines(path):
+    assert len(path.read_text().splitlines()) <= 300
+
+
+def test_the_rules_catch_a_violation(tmp_path):
+    """The checker itself can fail: a paper module importing mujoco is caught."""
+    fake = ROOT / "ledsim" / "paper" / "model.py"
+    assert rule_for(module_name(fake))[1] == FORBIDDEN["ledsim.paper"]
+    bad = tmp_path / "x.py"
+    bad.write_text("import mujoco\nfrom ..physics import world\n")
+    found = imports_of(bad, "ledsim.paper.x")
+    assert "mujoco" in found and "ledsim.physics.world" in found
+
+
+def test_the_paper_world_runs_without_mujoco():
+    """Evaluating a paper scenario never loads mujoco (checked in a fresh interpreter)."""
+    code = ("import sys\n"
+            "from ledsim.paper.evaluate import EvaluationConfig, evaluate\n"
+            "evaluate(EvaluationConfig(scenario='if1', seeds=1, starts=0, workers=1,\n"
+            "                          estimators=('kkl', 'ekf')), progress=False)\n"
+            "assert 'mujoco' not in sys.modules, 'mujoco was imported'\n"
+            "print('ok')\n")
+    r = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True,
+                       cwd=ROOT, timeout=300)
+    assert r.returncode == 0 and "ok" in r.stdout, r.stderr

@@ -21,7 +21,13 @@ class _Parser(argparse.ArgumentParser):
 
 
 class _Help(argparse.ArgumentDefaultsHelpFormatter):
-    pass
+    """Shows defaults, except where there is none to show."""
+
+    def _get_help_string(self, action):
+        text = action.help or ""
+        if action.default in (None, False, argparse.SUPPRESS) or action.required:
+            return text
+        return f"{text} (default: %(default)s)".strip()
 
 
 def _positive_int(text: str) -> int:
@@ -59,7 +65,8 @@ def _add_loop_args(p) -> None:
 
     p.add_argument("--scenario", default="align", **_choices(PHYSICS_SCENARIOS),
                    help="closed-loop scenario")
-    p.add_argument("--estimator", default="kkl", **_choices(LOOP_ESTIMATORS))
+    p.add_argument("--estimator", default="kkl", **_choices(LOOP_ESTIMATORS),
+                   help="estimator in the loop (oracle: handed the true state)")
     p.add_argument("--disturbance", action="append", default=[], metavar="SPEC",
                    help="name[:key=value,...] with name in " + ", ".join(DISTURBANCES)
                    + " (repeatable)")
@@ -72,7 +79,8 @@ def build_parser() -> argparse.ArgumentParser:
     from ..physics.simulation import TORQUE_PROFILES
     from ..presets import PRESETS
 
-    p = _Parser(prog="ledsim", description=__doc__.splitlines()[0])
+    p = _Parser(prog="ledsim", description="An underwater LED optical link in MuJoCo, kept "
+                "aligned by a learned KKL observer. User mistakes exit with code 2.")
     p.add_argument("--version", action="version", version=f"ledsim {__version__}")
     sub = p.add_subparsers(dest="command", required=True, parser_class=_Parser)
 
@@ -93,11 +101,12 @@ def build_parser() -> argparse.ArgumentParser:
     ev.add_argument("--out", required=True, help="output folder")
 
     tr = command("train", "learn a KKL observer (Algorithm 1) and save it")
-    tr.add_argument("--design", default="default", **_choices(PRESETS))
+    tr.add_argument("--design", default="default", **_choices(PRESETS),
+                    help="observer preset")
     tr.add_argument("--distance", type=_float, default=0.085, help="link distance d [m]")
     tr.add_argument("--samples", type=_positive_int, default=200_000,
                     help="training transitions")
-    tr.add_argument("--seed", type=int, default=0)
+    tr.add_argument("--seed", type=int, default=0, help="seed of data and features")
     tr.add_argument("--out", required=True, help="checkpoint path (.pt)")
 
     sim = command("simulate", "run the MuJoCo world headless; save series + plot")
@@ -130,13 +139,13 @@ def build_parser() -> argparse.ArgumentParser:
                     help="multiplies the measurement-noise std")
     rn.add_argument("--seconds", type=_float, default=None,
                     help="length of each run [s] (default: the scenario's, 10 s)")
-    rn.add_argument("--seeds", type=int, default=4)
-    rn.add_argument("--particles", type=int, default=2000)
+    rn.add_argument("--seeds", type=int, default=4, help="Monte-Carlo runs (seeds 0..N-1)")
+    rn.add_argument("--particles", type=int, default=2000, help="particle-filter size")
     rn.add_argument("--checkpoint", help="KKL checkpoint trained on the MuJoCo world")
     rn.add_argument("--omega-model", default="identified",
                     **_choices(("identified", "simulator", "none")),
                     help="f used by the KKL's Omega correction")
-    rn.add_argument("--workers", type=_positive_int, default=2)
+    rn.add_argument("--workers", type=_positive_int, default=2, help="processes")
     rn.add_argument("--no-plot", action="store_true", help="skip run.png")
     rn.add_argument("--out", required=True, help="output folder")
 
@@ -150,11 +159,12 @@ def build_parser() -> argparse.ArgumentParser:
                     help="a camera of the scene; the shipped one has " + ", ".join(CAMERAS))
     rd.add_argument("--gl", default=None, choices=["osmesa", "egl"],
                     help="OpenGL backend (default: MUJOCO_GL, else osmesa)")
-    rd.add_argument("--seed", type=int, default=0)
+    rd.add_argument("--seed", type=int, default=0, help="noise and disturbance seed")
     rd.add_argument("--out", required=True, help="video file (.mp4)")
 
     dm = command("demo", "main job: closed-loop alignment with every estimator")
-    dm.add_argument("--seeds", type=_positive_int, default=2)
+    dm.add_argument("--seeds", type=_positive_int, default=2,
+                    help="Monte-Carlo runs per estimator")
     dm.add_argument("--out", default="out/demo", help="output folder")
     dm.add_argument("--scene", help="MJCF scene file (default: the shipped led_link.xml)")
     dm.add_argument("--no-video", action="store_true", help="skip the rendered video")
