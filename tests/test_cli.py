@@ -145,3 +145,14 @@ def test_demo_with_a_missing_scene_is_one_line(tmp_path):
     r = run_cli("demo", "--seeds", "1", "--no-video", "--scene", "missing.xml",
                 "--out", str(tmp_path / "d"))
     assert_user_error(r, "does not exist")
+
+
+def test_results_on_stdout_progress_on_stderr_and_quiet_silences_it(tmp_path):
+    args = ["run", "--estimator", "oracle", "--seeds", "1", "--seconds", "1", "--no-plot"]
+    loud = run_cli(*args, "--out", str(tmp_path / "a"))
+    assert loud.returncode == 0, loud.stderr
+    assert "| align |" in loud.stdout and "it/s" not in loud.stdout
+    assert "wrote" in loud.stderr and "| align |" not in loud.stderr
+    quiet = run_cli(*args, "--quiet", "--out", str(tmp_path / "b"))
+    assert quiet.returncode == 0 and quiet.stderr == ""
+    assert "| align |" in quiet.stdout

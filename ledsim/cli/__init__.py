@@ -7,6 +7,7 @@ so ``ledsim COMMAND --help`` lists every choice with its default.
 from __future__ import annotations
 
 import argparse
+import logging
 import math
 import os
 import sys
@@ -30,24 +31,36 @@ class _Help(argparse.ArgumentDefaultsHelpFormatter):
         return f"{text} (default: %(default)s)".strip()
 
 
-def _positive_int(text: str) -> int:
-    try:
-        value = int(text)
-    except ValueError:
-        raise argparse.ArgumentTypeError(f"{text!r} is not an integer") from None
-    if value < 1:
-        raise argparse.ArgumentTypeError(f"{value} is not allowed: must be >= 1")
-    return value
+def number(lo: float, hi: float, unit: str = "", *, integer: bool = False,
+           lo_open: bool = False):
+    """An argparse type: a finite number in [lo, hi] (``lo_open``: (lo, hi]), so that
+    a non-finite, absurd or unphysical value is refused before any work, in one line."""
+    fmt = "{}" if integer else "{:g}"
+    allowed = f"{'(' if lo_open else '['}{fmt.format(lo)}, {fmt.format(hi)}] {unit}".rstrip()
+
+    def parse(text: str):
+        try:
+            value = int(text) if integer else float(text)
+        except ValueError:
+            kind = "an integer" if integer else "a number"
+            raise argparse.ArgumentTypeError(f"{text!r} is not {kind}") from None
+        if not math.isfinite(value):
+            raise argparse.ArgumentTypeError(f"{text!r} is not allowed: must be finite")
+        if not ((lo < value) if lo_open else (lo <= value)) or value > hi:
+            raise argparse.ArgumentTypeError(f"{text} is not allowed: must be in {allowed}")
+        return value
+
+    return parse
 
 
-def _float(text: str) -> float:
-    try:
-        value = float(text)
-    except ValueError:
-        raise argparse.ArgumentTypeError(f"{text!r} is not a number") from None
-    if not math.isfinite(value):
-        raise argparse.ArgumentTypeError(f"{text!r} is not allowed: must be finite")
-    return value
+DISTANCE = number(0.0, 5.0, "m", lo_open=True)
+SECONDS = number(0.0, 3600.0, "s", lo_open=True)
+SEED = number(0, 2**32 - 1, integer=True)
+SEEDS = number(1, 10_000, integer=True)
+PARTICLES = number(1, 1_000_000, integer=True)
+WORKERS = number(1, 64, integer=True)
+DPHI_DEG = number(-89.0, 89.0, "deg")
+TORQUE_LIMIT = number(0.0, 10.0, "N m", lo_open=True)
 
 
 def _choices(registry) -> dict:
@@ -55,7 +68,7 @@ def _choices(registry) -> dict:
 
 
 def _add_world_args(p, distance_help="link distance d [m]") -> None:
-    p.add_argument("--distance", type=_float, default=0.085, help=distance_help)
+    p.add_argument("--distance", type=DISTANCE, default=0.085, help=distance_help)
     p.add_argument("--scene", help="MJCF scene file (default: the shipped led_link.xml)")
 
 
@@ -84,86 +97,101 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--version", action="version", version=f"ledsim {__version__}")
     sub = p.add_subparsers(dest="command", required=True, parser_class=_Parser)
 
+    common = argparse.ArgumentParser(add_help=False)
+    common.add_argument("-q", "--quiet", action="store_true",
+                        help="no progress bars or diagnostics; results and errors only")
+
     def command(name, help):
-        return sub.add_parser(name, help=help, description=help, formatter_class=_Help)
+        return sub.add_parser(name, help=help, description=help, formatter_class=_Help,
+                              parents=[common])
 
     ev = command("evaluate", "paper Table 1/2 experiment: KKL vs EKF/UKF/PF")
     ev.add_argument("--scenario", required=True, **_choices(PAPER_SCENARIOS))
-    ev.add_argument("--distance", type=_float, default=0.085, help="link distance d [m]")
-    ev.add_argument("--dphi-deg", "--dphi", dest="dphi", type=_float, default=6.0,
+    ev.add_argument("--distance", type=DISTANCE, default=0.085, help="link distance d [m]")
+    ev.add_argument("--dphi-deg", "--dphi", dest="dphi", type=DPHI_DEG, default=6.0,
                     help="angle between the photodiode normals [deg]")
-    ev.add_argument("--seeds", type=int, default=10, help="noise seeds (>= 1)")
-    ev.add_argument("--starts", type=int, default=100,
+    ev.add_argument("--seeds", type=number(0, 10_000, integer=True), default=10,
+                    help="noise seeds (>= 1)")
+    ev.add_argument("--starts", type=number(0, 10_000, integer=True), default=100,
                     help="random initial guesses for the convergence share (0 to skip)")
-    ev.add_argument("--particles", type=int, default=5000, help="particle-filter size")
+    ev.add_argument("--particles", type=number(0, 1_000_000, integer=True), default=5000,
+                    help="particle-filter size")
     ev.add_argument("--checkpoint", help="KKL checkpoint (default: the shipped one for d)")
-    ev.add_argument("--workers", type=_positive_int, default=2, help="processes")
+    ev.add_argument("--workers", type=WORKERS, default=2, help="processes")
     ev.add_argument("--out", required=True, help="output folder")
 
     tr = command("train", "learn a KKL observer (Algorithm 1) and save it")
     tr.add_argument("--design", default="default", **_choices(PRESETS),
                     help="observer preset")
-    tr.add_argument("--distance", type=_float, default=0.085, help="link distance d [m]")
-    tr.add_argument("--samples", type=_positive_int, default=200_000,
+    tr.add_argument("--distance", type=DISTANCE, default=0.085, help="link distance d [m]")
+    tr.add_argument("--samples", type=number(1000, 1_000_000, integer=True), default=200_000,
                     help="training transitions")
-    tr.add_argument("--seed", type=int, default=0, help="seed of data and features")
+    tr.add_argument("--seed", type=SEED, default=0, help="seed of data and features")
     tr.add_argument("--out", required=True, help="checkpoint path (.pt)")
 
     sim = command("simulate", "run the MuJoCo world headless; save series + plot")
-    sim.add_argument("--seconds", type=_float, default=5.0, help="duration [s]")
+    sim.add_argument("--seconds", type=SECONDS, default=5.0, help="duration [s]")
     sim.add_argument("--torque-profile", default="zero", **_choices(TORQUE_PROFILES),
                      help="gimbal torque")
-    sim.add_argument("--torque-amplitude", type=_float, default=0.002, help="[N m]")
-    sim.add_argument("--torque-frequency", type=_float, default=0.5, help="[Hz]")
+    sim.add_argument("--torque-amplitude", type=number(-10.0, 10.0, "N m"), default=0.002,
+                     help="[N m]")
+    sim.add_argument("--torque-frequency", type=number(0.0, 50.0, "Hz", lo_open=True),
+                     default=0.5, help="[Hz]")
     from ..physics.disturbances import DISTURBANCES
 
     sim.add_argument("--disturbance", action="append", default=[], metavar="SPEC",
                      help="name[:key=value,...] with name in " + ", ".join(DISTURBANCES)
                      + " (repeatable)")
     _add_world_args(sim)
-    sim.add_argument("--dphi-deg", "--dphi", dest="dphi", type=_float, default=6.0,
+    sim.add_argument("--dphi-deg", "--dphi", dest="dphi", type=DPHI_DEG, default=6.0,
                      help="angle between the photodiode normals [deg]")
-    sim.add_argument("--led-yaw-deg", "--led-yaw", dest="led_yaw", type=_float, default=0.0,
+    sim.add_argument("--led-yaw-deg", "--led-yaw", dest="led_yaw",
+                     type=number(-180.0, 180.0, "deg"), default=0.0,
                      help="LED axis turned away from the receiver [deg]")
-    sim.add_argument("--led-offset", type=_float, default=0.0,
+    sim.add_argument("--led-offset", type=number(-1.0, 1.0, "m"), default=0.0,
                      help="LED moved across the link [m]")
-    sim.add_argument("--torque-limit", type=_float, default=0.05, help="[N m]")
-    sim.add_argument("--gimbal-angle", type=_float, default=0.0, help="initial angle [rad]")
-    sim.add_argument("--seed", type=int, default=0, help="measurement-noise seed")
+    sim.add_argument("--torque-limit", type=TORQUE_LIMIT, default=0.05, help="[N m]")
+    sim.add_argument("--gimbal-angle", type=number(-math.pi, math.pi, "rad"), default=0.0,
+                     help="initial angle [rad]")
+    sim.add_argument("--seed", type=SEED, default=0, help="measurement-noise seed")
     sim.add_argument("--out", required=True, help="output folder")
 
     rn = command("run", "closed loop in MuJoCo: estimator + controller + gimbal")
     _add_loop_args(rn)
-    rn.add_argument("--torque-limit", type=_float, default=0.05, help="[N m]")
-    rn.add_argument("--noise-scale", type=_float, default=1.0,
+    rn.add_argument("--torque-limit", type=TORQUE_LIMIT, default=0.05, help="[N m]")
+    rn.add_argument("--noise-scale", type=number(0.0, 100.0, lo_open=True), default=1.0,
                     help="multiplies the measurement-noise std")
-    rn.add_argument("--seconds", type=_float, default=None,
+    rn.add_argument("--seconds", type=SECONDS, default=None,
                     help="length of each run [s] (default: the scenario's, 10 s)")
-    rn.add_argument("--seeds", type=int, default=4, help="Monte-Carlo runs (seeds 0..N-1)")
-    rn.add_argument("--particles", type=int, default=2000, help="particle-filter size")
+    rn.add_argument("--seeds", type=SEEDS, default=4, help="Monte-Carlo runs (seeds 0..N-1)")
+    rn.add_argument("--particles", type=PARTICLES, default=2000, help="particle-filter size")
     rn.add_argument("--checkpoint", help="KKL checkpoint trained on the MuJoCo world")
     rn.add_argument("--omega-model", default="identified",
                     **_choices(("identified", "simulator", "none")),
                     help="f used by the KKL's Omega correction")
-    rn.add_argument("--workers", type=_positive_int, default=2, help="processes")
+    rn.add_argument("--workers", type=WORKERS, default=2, help="processes")
     rn.add_argument("--no-plot", action="store_true", help="skip run.png")
     rn.add_argument("--out", required=True, help="output folder")
 
     rd = command("render", "render a closed-loop run to an H.264 mp4 (headless)")
     _add_loop_args(rd)
-    rd.add_argument("--seconds", type=_float, default=6.0, help="[s]")
-    rd.add_argument("--width", type=int, default=640, help="[px]")
-    rd.add_argument("--height", type=int, default=480, help="[px]")
-    rd.add_argument("--fps", type=_float, default=30.0, help="frames per second")
+    rd.add_argument("--seconds", type=number(0.0, 600.0, "s", lo_open=True), default=6.0,
+                    help="[s]")
+    rd.add_argument("--width", type=number(-10_000, 10_000, integer=True), default=640,
+                    help="[px]")
+    rd.add_argument("--height", type=number(-10_000, 10_000, integer=True), default=480,
+                    help="[px]")
+    rd.add_argument("--fps", type=number(-1e6, 240.0), default=30.0,
+                    help="frames per second, at most 240")
     rd.add_argument("--camera", default="side",
                     help="a camera of the scene; the shipped one has " + ", ".join(CAMERAS))
     rd.add_argument("--gl", default=None, choices=["osmesa", "egl"],
                     help="OpenGL backend (default: MUJOCO_GL, else osmesa)")
-    rd.add_argument("--seed", type=int, default=0, help="noise and disturbance seed")
+    rd.add_argument("--seed", type=SEED, default=0, help="noise and disturbance seed")
     rd.add_argument("--out", required=True, help="video file (.mp4)")
 
     dm = command("demo", "main job: closed-loop alignment with every estimator")
-    dm.add_argument("--seeds", type=_positive_int, default=2,
+    dm.add_argument("--seeds", type=number(1, 1000, integer=True), default=2,
                     help="Monte-Carlo runs per estimator")
     dm.add_argument("--out", default="out/demo", help="output folder")
     dm.add_argument("--scene", help="MJCF scene file (default: the shipped led_link.xml)")
@@ -190,6 +218,9 @@ def main(argv: list[str] | None = None) -> int:
     from . import commands
 
     args = build_parser().parse_args(argv)
+    # Results go to stdout; progress bars (tqdm) and diagnostics (logging) to stderr.
+    logging.basicConfig(format="ledsim: %(message)s",
+                        level=logging.WARNING if args.quiet else logging.INFO)
     try:
         return getattr(commands, args.command)(args)
     except (LedsimError, ObserverError) as exc:

@@ -6,12 +6,15 @@ Arguments were parsed by :func:`ledsim.cli.build_parser`; errors are raised as
 
 from __future__ import annotations
 
+import logging
 import math
 import os
 import time
 from pathlib import Path
 
 from ..errors import LedsimError
+
+log = logging.getLogger("ledsim")
 
 
 def _check_out_dir(path: str) -> Path:
@@ -34,6 +37,20 @@ def _writable_dir(path: str) -> Path:
     return out
 
 
+def _check_out_file(path: str, suffix: str) -> Path:
+    """Refuse an output file that could not be written, before any work is done."""
+    out = Path(path)
+    if out.is_dir():
+        raise LedsimError(f"--out {path!r} is a folder, not a file")
+    if out.suffix.lower() != suffix:
+        raise LedsimError(f"--out {path!r}: the file must end in {suffix}")
+    parent = out.parent
+    if not parent.is_dir() or not os.access(parent, os.W_OK):
+        raise LedsimError(f"--out {path!r}: folder {str(parent)!r} does not exist or is not "
+                          "writable")
+    return out
+
+
 def _loop_config(args, **kw):
     from ..loop.config import RunConfig
 
@@ -46,7 +63,7 @@ def _loop_config(args, **kw):
 
 def simulate(args) -> int:
     from ..config import LinkConstants
-    from ..physics.disturbances import parse_disturbance
+    from ..physics.disturbances import check_timing, parse_disturbance
     from ..physics.scene import WorldConfig
     from ..physics.sensor import IrradianceSensor
     from ..physics.simulation import simulate, torque_profile
@@ -59,6 +76,7 @@ def simulate(args) -> int:
     profile = torque_profile(args.torque_profile, args.torque_amplitude,
                              args.torque_frequency)
     disturbances = [parse_disturbance(d) for d in args.disturbance]
+    check_timing(disturbances, args.seconds)
     constants = LinkConstants(distance=args.distance, dphi=math.radians(args.dphi))
     extra = {} if args.scene is None else {"xml": Path(args.scene)}
     world = LinkWorld(WorldConfig(constants=constants, torque_limit=args.torque_limit,
@@ -67,7 +85,8 @@ def simulate(args) -> int:
     world.reset(gimbal_angle=args.gimbal_angle)
     sensor = IrradianceSensor(world, seed=args.seed)
     t0 = time.perf_counter()
-    res = simulate(world, sensor, args.seconds, profile, disturbances, progress=True)
+    res = simulate(world, sensor, args.seconds, profile, disturbances,
+                   progress=not args.quiet)
     wall = time.perf_counter() - t0
     out = _writable_dir(args.out)
     res.save_npz(out / "series.npz")
@@ -75,7 +94,7 @@ def simulate(args) -> int:
     title = f"d = {args.distance:g} m, torque {args.torque_profile}" + (
         f", {', '.join(args.disturbance)}" if args.disturbance else "")
     plot_series(res, out / "series.png", title)
-    print(f"simulated {args.seconds:g} s ({len(res.t)} steps) in {wall:.2f} s "
+    log.info(f"simulated {args.seconds:g} s ({len(res.t)} steps) in {wall:.2f} s "
           f"({args.seconds / wall:.0f}x real time); wrote {out}/series.npz, series.csv, "
           "series.png")
     return 0
@@ -89,11 +108,11 @@ def run(args) -> int:
                        checkpoint=args.checkpoint, omega_model=args.omega_model,
                        workers=args.workers, seconds=args.seconds)
     _check_out_dir(args.out)
-    summary, trace = run_many(cfg)
+    summary, trace = run_many(cfg, progress=not args.quiet)
     paths = write_run(summary, trace, _writable_dir(args.out), plot=not args.no_plot)
     print(TABLE_HEADER)
     print(format_summary(summary))
-    print(f"wrote {', '.join(str(p) for p in paths)}")
+    log.info(f"wrote {', '.join(str(p) for p in paths)}")
     return 0
 
 
@@ -110,7 +129,8 @@ def demo(args) -> int:
     rows, summaries = [], []
     for est in LOOP_ESTIMATORS:
         summary, trace = run_many(RunConfig(scenario="align", estimator=est,
-                                            seeds=args.seeds, scene=args.scene))
+                                            seeds=args.seeds, scene=args.scene),
+                                  progress=not args.quiet)
         write_run(summary, trace, out / est)
         summaries.append(summary)
         rows.append(format_summary(summary))
@@ -118,13 +138,13 @@ def demo(args) -> int:
     atomic_write_text(out / "table.md", TABLE_HEADER + "\n" + "\n".join(rows) + "\n")
     write_json(out / "results.json", summaries)
     if not args.no_video:
-        _demo_video(out, args.scene)
-    print(f"wrote {out}/table.md, results.json, <estimator>/run.png in "
+        _demo_video(out, args.scene, not args.quiet)
+    log.info(f"wrote {out}/table.md, results.json, <estimator>/run.png in "
           f"{time.perf_counter() - t0:.0f} s")
     return 0
 
 
-def _demo_video(out: Path, scene: str | None) -> None:
+def _demo_video(out: Path, scene: str | None, progress: bool) -> None:
     """A short video of the KKL-driven alignment with an occlusion, and a still frame."""
     from ..loop.config import RunConfig
     from ..loop.video import VideoSpec, check_video, render_video
@@ -133,8 +153,8 @@ def _demo_video(out: Path, scene: str | None) -> None:
                     disturbances=("occlusion:start=3,duration=0.5",))
     check_video(cfg, VideoSpec())
     frames = render_video(cfg, 0, out / "alignment.mp4", VideoSpec(),
-                          still=out / "alignment.png", progress=True)
-    print(f"rendered {frames} frames; wrote {out}/alignment.mp4, alignment.png")
+                          still=out / "alignment.png", progress=progress)
+    log.info(f"rendered {frames} frames; wrote {out}/alignment.mp4, alignment.png")
 
 
 def render(args) -> int:
@@ -143,21 +163,16 @@ def render(args) -> int:
     for flag, value in (("--fps", args.fps), ("--seconds", args.seconds)):
         if not value > 0:
             raise LedsimError(f"{flag} {value!r} is not allowed: must be > 0")
-    out = Path(args.out)
-    if out.suffix.lower() != ".mp4":
-        raise LedsimError(f"--out {args.out!r}: the video must be an .mp4 file")
-    if not out.parent.exists() or not os.access(out.parent, os.W_OK):
-        raise LedsimError(f"--out {args.out!r}: folder {str(out.parent)!r} does not exist or "
-                          "is not writable")
+    out = _check_out_file(args.out, ".mp4")
     from ..loop.video import VideoSpec, check_video, render_video
 
     cfg = _loop_config(args, seconds=args.seconds)
     spec = VideoSpec(args.width, args.height, args.fps, args.camera)
     check_video(cfg, spec)
     t0 = time.perf_counter()
-    frames = render_video(cfg, args.seed, out, spec, progress=True)
+    frames = render_video(cfg, args.seed, out, spec, progress=not args.quiet)
     wall = time.perf_counter() - t0
-    print(f"rendered {frames} frames ({args.width}x{args.height}) in {wall:.1f} s "
+    log.info(f"rendered {frames} frames ({args.width}x{args.height}) in {wall:.1f} s "
           f"({frames / wall:.1f} frames/s incl. physics and observer); wrote {out}")
     return 0
 
@@ -171,10 +186,10 @@ def evaluate(args) -> int:
                            checkpoint=args.checkpoint, workers=args.workers)
     _check_out_dir(args.out)
     t0 = time.perf_counter()
-    result = evaluate(cfg)
+    result = evaluate(cfg, progress=not args.quiet)
     paths = write_outputs(result, _writable_dir(args.out))
     print(markdown_table(result))
-    print(f"wrote {', '.join(str(p) for p in paths)} in {time.perf_counter() - t0:.0f} s")
+    log.info(f"wrote {', '.join(str(p) for p in paths)} in {time.perf_counter() - t0:.0f} s")
     return 0
 
 
@@ -186,12 +201,13 @@ def train(args) -> int:
     from ..paper.model import LEDLinkModel
     from ..presets import observer_preset
 
+    _check_out_file(args.out, ".pt")
     system = LEDLinkModel(LinkConstants(distance=args.distance))
     design, config = observer_preset(args.design, system.Te)
     config.n_samples = args.samples
     config.seed = args.seed
-    obs, report = train_kkl(system, design, config)
+    obs, report = train_kkl(system, design, config, progress=not args.quiet)
     path = checkpoint.save(obs, args.out)
-    print(f"trained {args.design} observer in {report.seconds:.1f} s: "
+    log.info(f"trained {args.design} observer in {report.seconds:.1f} s: "
           f"L_dyn={report.loss_dyn:.2e}, L_recon={report.loss_recon:.2e}; wrote {path}")
     return 0

@@ -19,7 +19,7 @@ from ..config import LinkConstants
 from ..control import AlignmentPID, Excitation, PaperRateDamping
 from ..errors import LedsimError
 from ..estimators import ESTIMATORS
-from ..physics.disturbances import parse_disturbance
+from ..physics.disturbances import check_timing, parse_disturbance
 from ..physics.scene import WorldConfig
 from ..scenario import Scenario
 
@@ -94,8 +94,7 @@ class RunConfig:
         for flag, value, ok, allowed in checks:
             if not (ok and math.isfinite(value)):
                 raise LedsimError(f"{flag} {value!r} is not allowed: must be {allowed}")
-        for d in self.disturbances:
-            parse_disturbance(d)
+        check_timing([parse_disturbance(d) for d in self.disturbances], self.run_seconds)
 
     @property
     def scenario_spec(self) -> Scenario:

@@ -181,6 +181,24 @@ class Occlusion(Disturbance):
         return self.start + self.duration
 
 
+#: Allowed values of every key: (low, high, unit, low end excluded). Wide enough for any
+#: physical test of a small AUV, narrow enough that MuJoCo stays finite.
+RANGES = {
+    "frequency": (0.0, 50.0, "Hz", True),  # Nyquist of the 10 ms control period
+    "torque": (-100.0, 100.0, "N m", False),
+    "force": (-1000.0, 1000.0, "N", False),
+    "speed": (0.0, 5.0, "m/s", False),
+    "heading": (-2 * math.pi, 2 * math.pi, "rad", False),
+    "gust": (0.0, 2.0, "m/s", False),
+    "gust_time": (0.0, 100.0, "s", True),
+    "hold": (0.0, 1.0, "(0 or 1)", False),
+    "seed": (0, 2**32 - 1, "", False),
+    "sway": (-0.1, 0.1, "m", False),
+    "yaw": (-math.pi / 2, math.pi / 2, "rad", False),
+    "start": (0.0, 3600.0, "s", False),
+    "duration": (0.0, 3600.0, "s", True),
+}
+
 DISTURBANCES = {
     "vibration": HullVibration,
     "current": WaterCurrent,
@@ -208,9 +226,22 @@ def parse_disturbance(text: str) -> Disturbance:
         except ValueError:
             raise DisturbanceError(f"bad value {value!r} for {name}.{key}: not a number") \
                 from None
-        if not math.isfinite(kwargs[key]):
-            raise DisturbanceError(f"bad value {value!r} for {name}.{key}: must be finite")
-    for key in ("frequency", "duration", "gust_time"):
-        if key in kwargs and kwargs[key] <= 0:
-            raise DisturbanceError(f"{name}.{key}={kwargs[key]!r} is not allowed: must be > 0")
+        lo, hi, unit, lo_open = RANGES[key]
+        v = kwargs[key]
+        if not (math.isfinite(v) and (lo < v if lo_open else lo <= v) and v <= hi):
+            raise DisturbanceError(f"{name}.{key}={value} is not allowed: must be in "
+                                   f"{'(' if lo_open else '['}{lo:.4g}, {hi:.4g}] {unit}"
+                                   .rstrip())
+    if name == "current" and kwargs.get("hold", 1.0) not in (0.0, 1.0):
+        raise DisturbanceError(f"current.hold={kwargs['hold']!r} is not allowed: must be 0 or 1")
     return cls(**kwargs)
+
+
+def check_timing(disturbances, seconds: float) -> None:
+    """Refuse a transient event that the run would never see (it starts at or after the
+    end of a run of ``seconds`` s)."""
+    for d in disturbances:
+        start = getattr(d, "start", None)
+        if start is not None and start >= seconds:
+            raise DisturbanceError(f"{type(d).__name__.lower()} starts at {start:g} s, at or "
+                                   f"after the end of the {seconds:g} s run")
