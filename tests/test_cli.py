@@ -8,8 +8,8 @@ from ledsim.cli import main
 
 @pytest.mark.parametrize("args,needle", [
     (["--scenario", "nope"], "nope"),
-    (["--scenario", "if1", "--distance", "0"], "--distance 0.0"),
-    (["--scenario", "if1", "--distance", "-0.1"], "--distance -0.1"),
+    (["--scenario", "if1", "--distance", "0"], "--distance: 0 is not allowed"),
+    (["--scenario", "if1", "--distance", "-0.1"], "--distance: -0.1 is not allowed"),
     (["--scenario", "if1", "--seeds", "0"], "--seeds 0"),
     (["--scenario", "if1", "--dphi", "0"], "--dphi 0"),
     (["--scenario", "if1", "--dphi-deg", "0"], "--dphi 0"),
@@ -61,7 +61,7 @@ def test_evaluate_writes_results_table_and_figures(tmp_path, capsys):
 
 @pytest.mark.parametrize("args,needle", [
     (["--distance", "0"], "distance"),
-    (["--torque-limit", "0"], "torque_limit"),
+    (["--torque-limit", "0"], "--torque-limit: 0 is not allowed"),
     (["--disturbance", "tornado"], "tornado"),
     (["--torque-profile", "wobble"], "wobble"),
     (["--seconds", "-1"], "--seconds"),
