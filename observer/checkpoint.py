@@ -45,9 +45,11 @@ def save(obs: KKLObserver, path: str | Path, extra: dict | None = None) -> Path:
                for prefix, net in (("encoder_T", obs.encoder_T),
                                    ("decoder_T_star", obs.decoder_T_star))
                for k, a in net.arrays().items()}
-    payload = {"format": FORMAT, "metadata_json": json.dumps(meta), **tensors}
+    meta = strict_json(meta)
+    payload = {"format": FORMAT, "metadata_json": json.dumps(meta, allow_nan=False), **tensors}
     atomic_write_bytes(path, lambda tmp: torch.save(payload, tmp))
-    atomic_write_text(path.with_suffix(".json"), json.dumps(meta, indent=2) + "\n")
+    atomic_write_text(path.with_suffix(".json"), json.dumps(meta, indent=2, allow_nan=False)
+                      + "\n")
     return path
 
 
@@ -64,28 +66,61 @@ def load(path: str | Path, system: DiscreteSystem, check: bool = True) -> KKLObs
         enc, dec = (NumpyMLP(*(payload[f"{prefix}.{k}"].double().numpy()
                                for k in ("W1", "b1", "W2", "b2")))
                     for prefix in ("encoder_T", "decoder_T_star"))
+        lam = np.asarray(meta["eigenvalues"], dtype=float)
+        B = np.asarray(meta["B_scaled"], dtype=float)
+        u_bar = float(meta.get("u_bar", 0.0))
+        saved_system = meta["system"]
     except Exception as exc:  # corrupt file, wrong keys, not a torch file
         raise CheckpointError(f"checkpoint {str(path)!r} is corrupt or not a ledsim "
                               f"checkpoint ({type(exc).__name__})") from None
     if payload.get("format") != FORMAT:
         raise CheckpointError(f"checkpoint {str(path)!r} has format "
                               f"{payload.get('format')!r}, expected {FORMAT!r}")
-    lam = np.asarray(meta["eigenvalues"], dtype=float)
-    B = np.asarray(meta["B_scaled"], dtype=float)
-    shapes_ok = (enc.n_in == system.n_state and dec.n_out == system.n_state
-                 and enc.n_out == lam.size == dec.n_in and B.shape == (lam.size, system.n_output))
-    if not shapes_ok:
-        raise CheckpointError(f"checkpoint {str(path)!r} has network shapes that do not fit "
-                              f"a system with n={system.n_state}, p={system.n_output}")
+    _check_contents(path, enc, dec, lam, B, u_bar, system)
     if check:
-        mismatch = first_mismatch(meta["system"], system.metadata())
+        mismatch = first_mismatch(saved_system, system.metadata())
         if mismatch:
             key, saved, current = mismatch
             raise CheckpointError(f"checkpoint {str(path)!r} was trained with {key}={saved!r} "
                                   f"but the run uses {key}={current!r}")
-    obs = KKLObserver(system, lam, B, enc, dec, u_bar=meta.get("u_bar", 0.0))
+    obs = KKLObserver(system, lam, B, enc, dec, u_bar=u_bar)
     obs.training_metadata = {k: meta[k] for k in ("design", "training", "report") if k in meta}
     return obs
+
+
+def _consistent(net: NumpyMLP) -> bool:
+    H = net.W1.shape[0] if net.W1.ndim == 2 else -1
+    return (net.W1.ndim == 2 and net.b1.shape == (H,) and net.W2.ndim == 2
+            and net.W2.shape[1] == H and net.b2.shape == (net.W2.shape[0],))
+
+
+def _check_contents(path, enc, dec, lam, B, u_bar, system) -> None:
+    """A checkpoint that loads can still be poison: refuse bad shapes, non-finite
+    numbers and an A that is not a contraction (it would make z diverge)."""
+    name = repr(str(path))
+    shapes_ok = (_consistent(enc) and _consistent(dec) and lam.ndim == 1
+                 and enc.n_in == system.n_state and dec.n_out == system.n_state
+                 and enc.n_out == lam.size == dec.n_in and B.shape == (lam.size, system.n_output))
+    if not shapes_ok:
+        raise CheckpointError(f"checkpoint {name} has network shapes that do not fit "
+                              f"a system with n={system.n_state}, p={system.n_output}")
+    arrays = [*enc.arrays().values(), *dec.arrays().values(), lam, B, np.array(u_bar)]
+    if not all(np.isfinite(a).all() for a in arrays):
+        raise CheckpointError(f"checkpoint {name} holds NaN or infinite numbers")
+    if not np.all(np.abs(lam) < 1):
+        raise CheckpointError(f"checkpoint {name} has eigenvalues {lam.tolist()} outside "
+                              "(-1, 1): its observer would diverge")
+
+
+def strict_json(obj):
+    """``obj`` with every non-finite float replaced by None (valid, strict JSON)."""
+    if isinstance(obj, dict):
+        return {k: strict_json(v) for k, v in obj.items()}
+    if isinstance(obj, list | tuple):
+        return [strict_json(v) for v in obj]
+    if isinstance(obj, float) and not math.isfinite(obj):
+        return None
+    return obj
 
 
 def first_mismatch(saved, current, prefix: str = "") -> tuple[str, object, object] | None:

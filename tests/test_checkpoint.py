@@ -52,3 +52,42 @@ def test_shipped_checkpoints_load_and_track(d, bound):
     out = run(system, sc, obs, Noise.draw(system, sc.n_steps(system.Te), 7))
     err = rmse(out.xhat, out.x, sc.steady_step(system.Te))
     assert err[0] < bound[0] and err[1] < bound[1]
+
+
+def _poisoned(src, dst, mutate):
+    import torch
+
+    payload = torch.load(src, weights_only=True)
+    mutate(payload)
+    torch.save(payload, dst)
+    return dst
+
+
+@pytest.mark.parametrize("mutate,needle", [
+    (lambda p: p["decoder_T_star.W2"].fill_(float("nan")), "NaN or infinite"),
+    (lambda p: p["encoder_T.b1"].fill_(float("inf")), "NaN or infinite"),
+    (lambda p: p.update(metadata_json=p["metadata_json"].replace(
+        '"eigenvalues": [', '"eigenvalues": [5.0, ')), "shapes"),
+    (lambda p: p.update({"encoder_T.b1": p["encoder_T.b1"][:-1]}), "shapes"),
+    (lambda p: p.update(metadata_json="{}"), "corrupt"),
+])
+def test_checkpoints_that_load_but_are_poison_are_refused(tmp_path, tiny_observer, system,
+                                                          mutate, needle):
+    good = checkpoint.save(tiny_observer, tmp_path / "good.pt")
+    bad = _poisoned(good, tmp_path / "bad.pt", mutate)
+    with pytest.raises(checkpoint.CheckpointError, match=needle):
+        checkpoint.load(bad, system)
+
+
+def test_unstable_eigenvalues_are_refused(tmp_path, tiny_observer, system):
+    import json
+
+    def unstable(p):
+        meta = json.loads(p["metadata_json"])
+        meta["eigenvalues"] = [5.0] + meta["eigenvalues"][1:]
+        p["metadata_json"] = json.dumps(meta)
+
+    bad = _poisoned(checkpoint.save(tiny_observer, tmp_path / "g.pt"), tmp_path / "b.pt",
+                    unstable)
+    with pytest.raises(checkpoint.CheckpointError, match="outside"):
+        checkpoint.load(bad, system)

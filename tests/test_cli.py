@@ -156,3 +156,62 @@ def test_results_on_stdout_progress_on_stderr_and_quiet_silences_it(tmp_path):
     quiet = run_cli(*args, "--quiet", "--out", str(tmp_path / "b"))
     assert quiet.returncode == 0 and quiet.stderr == ""
     assert "| align |" in quiet.stdout
+
+
+def test_outputs_are_all_or_nothing(tmp_path, monkeypatch):
+    """A failure half-way through writing leaves no folder and no temporary behind."""
+    def broken_plot(*args, **kwargs):
+        raise KeyboardInterrupt  # as if Ctrl-C hit between results.json and run.png
+
+    monkeypatch.setattr("ledsim.plotting.plot_run", broken_plot)
+    out = tmp_path / "run"
+    code = main(["run", "--estimator", "oracle", "--seeds", "1", "--seconds", "1",
+                 "--out", str(out)])
+    assert code == 130 and not out.exists() and list(tmp_path.iterdir()) == []
+
+
+def _children(pid: int) -> list[int]:
+    from pathlib import Path
+
+    kids = []
+    for task in Path(f"/proc/{pid}/task").glob("*"):
+        kids += [int(k) for k in (task / "children").read_text().split()]
+    return kids
+
+
+def _alive(pid: int) -> bool:
+    from pathlib import Path
+
+    try:
+        return Path(f"/proc/{pid}/stat").read_text().split(")")[-1].split()[0] != "Z"
+    except FileNotFoundError:
+        return False
+
+
+def test_workers_die_with_their_parent(tmp_path):
+    """SIGKILL of ``ledsim run --workers 2`` leaves no orphaned worker behind."""
+    import os
+    import signal
+    import subprocess
+    import sys
+    import time
+
+    proc = subprocess.Popen([sys.executable, "-m", "ledsim.cli", "run", "--estimator", "ekf",
+                             "--seeds", "4", "--workers", "2", "--seconds", "60", "--quiet",
+                             "--out", str(tmp_path / "r")],
+                            stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
+    try:
+        deadline = time.time() + 60
+        workers = []
+        while time.time() < deadline and len(workers) < 2:
+            time.sleep(0.2)
+            workers = _children(proc.pid)
+        assert len(workers) >= 2, "the workers never started"
+        os.kill(proc.pid, signal.SIGKILL)
+        proc.wait()
+        deadline = time.time() + 20
+        while time.time() < deadline and any(_alive(w) for w in workers):
+            time.sleep(0.2)
+        assert not any(_alive(w) for w in workers)
+    finally:
+        proc.kill()

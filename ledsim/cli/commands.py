@@ -13,28 +13,9 @@ import time
 from pathlib import Path
 
 from ..errors import LedsimError
+from ..outputs import check_out_dir, output_folder
 
 log = logging.getLogger("ledsim")
-
-
-def _check_out_dir(path: str) -> Path:
-    """Refuse an --out that exists as a file, before any work is done."""
-    out = Path(path)
-    if out.exists() and not out.is_dir():
-        raise LedsimError(f"--out {path!r} exists and is not a folder")
-    return out
-
-
-def _writable_dir(path: str) -> Path:
-    """The --out folder, created if needed and checked writable."""
-    out = _check_out_dir(path)
-    try:
-        out.mkdir(parents=True, exist_ok=True)
-    except OSError as exc:
-        raise LedsimError(f"--out {path!r} cannot be created: {exc.strerror}") from None
-    if not os.access(out, os.W_OK):
-        raise LedsimError(f"--out {path!r} is not writable")
-    return out
 
 
 def _check_out_file(path: str, suffix: str) -> Path:
@@ -72,7 +53,7 @@ def simulate(args) -> int:
 
     if not args.seconds > 0:
         raise LedsimError(f"--seconds {args.seconds!r} is not allowed: must be > 0")
-    _check_out_dir(args.out)
+    check_out_dir(args.out)
     profile = torque_profile(args.torque_profile, args.torque_amplitude,
                              args.torque_frequency)
     disturbances = [parse_disturbance(d) for d in args.disturbance]
@@ -88,12 +69,13 @@ def simulate(args) -> int:
     res = simulate(world, sensor, args.seconds, profile, disturbances,
                    progress=not args.quiet)
     wall = time.perf_counter() - t0
-    out = _writable_dir(args.out)
-    res.save_npz(out / "series.npz")
-    res.save_csv(out / "series.csv")
+    out = Path(args.out)
     title = f"d = {args.distance:g} m, torque {args.torque_profile}" + (
         f", {', '.join(args.disturbance)}" if args.disturbance else "")
-    plot_series(res, out / "series.png", title)
+    with output_folder(out) as tmp:
+        res.save_npz(tmp / "series.npz")
+        res.save_csv(tmp / "series.csv")
+        plot_series(res, tmp / "series.png", title)
     log.info(f"simulated {args.seconds:g} s ({len(res.t)} steps) in {wall:.2f} s "
           f"({args.seconds / wall:.0f}x real time); wrote {out}/series.npz, series.csv, "
           "series.png")
@@ -107,9 +89,10 @@ def run(args) -> int:
                        seeds=args.seeds, particles=args.particles,
                        checkpoint=args.checkpoint, omega_model=args.omega_model,
                        workers=args.workers, seconds=args.seconds)
-    _check_out_dir(args.out)
+    out = check_out_dir(args.out)
     summary, trace = run_many(cfg, progress=not args.quiet)
-    paths = write_run(summary, trace, _writable_dir(args.out), plot=not args.no_plot)
+    with output_folder(out) as tmp:
+        paths = [out / p.name for p in write_run(summary, trace, tmp, plot=not args.no_plot)]
     print(TABLE_HEADER)
     print(format_summary(summary))
     log.info(f"wrote {', '.join(str(p) for p in paths)}")
@@ -124,22 +107,24 @@ def demo(args) -> int:
     from ..loop.report import TABLE_HEADER, format_summary, run_many, write_run
     from ..results import write_json
 
-    out = _writable_dir(args.out)
+    out = check_out_dir(args.out)
     t0 = time.perf_counter()
     rows, summaries = [], []
-    for est in LOOP_ESTIMATORS:
-        summary, trace = run_many(RunConfig(scenario="align", estimator=est,
-                                            seeds=args.seeds, scene=args.scene),
-                                  progress=not args.quiet)
-        write_run(summary, trace, out / est)
-        summaries.append(summary)
-        rows.append(format_summary(summary))
-        print(rows[-1] if len(rows) > 1 else f"{TABLE_HEADER}\n{rows[-1]}", flush=True)
-    atomic_write_text(out / "table.md", TABLE_HEADER + "\n" + "\n".join(rows) + "\n")
-    write_json(out / "results.json", summaries)
-    if not args.no_video:
-        _demo_video(out, args.scene, not args.quiet)
-    log.info(f"wrote {out}/table.md, results.json, <estimator>/run.png in "
+    with output_folder(out) as tmp:
+        for est in LOOP_ESTIMATORS:
+            summary, trace = run_many(RunConfig(scenario="align", estimator=est,
+                                                seeds=args.seeds, scene=args.scene),
+                                      progress=not args.quiet)
+            write_run(summary, trace, tmp / est)
+            summaries.append(summary)
+            rows.append(format_summary(summary))
+            print(rows[-1] if len(rows) > 1 else f"{TABLE_HEADER}\n{rows[-1]}", flush=True)
+        atomic_write_text(tmp / "table.md", TABLE_HEADER + "\n" + "\n".join(rows) + "\n")
+        write_json(tmp / "results.json", summaries)
+        if not args.no_video:
+            _demo_video(tmp, args.scene, not args.quiet)
+    log.info(f"wrote {out}/table.md, results.json, <estimator>/run.png"
+             f"{'' if args.no_video else ', alignment.mp4, alignment.png'} in "
           f"{time.perf_counter() - t0:.0f} s")
     return 0
 
@@ -154,7 +139,7 @@ def _demo_video(out: Path, scene: str | None, progress: bool) -> None:
     check_video(cfg, VideoSpec())
     frames = render_video(cfg, 0, out / "alignment.mp4", VideoSpec(),
                           still=out / "alignment.png", progress=progress)
-    log.info(f"rendered {frames} frames; wrote {out}/alignment.mp4, alignment.png")
+    log.info(f"rendered {frames} frames of alignment.mp4")
 
 
 def render(args) -> int:
@@ -184,10 +169,11 @@ def evaluate(args) -> int:
                            dphi=math.radians(args.dphi), seeds=args.seeds,
                            starts=args.starts, particles=args.particles,
                            checkpoint=args.checkpoint, workers=args.workers)
-    _check_out_dir(args.out)
+    out = check_out_dir(args.out)
     t0 = time.perf_counter()
     result = evaluate(cfg, progress=not args.quiet)
-    paths = write_outputs(result, _writable_dir(args.out))
+    with output_folder(out) as tmp:
+        paths = [out / p.name for p in write_outputs(result, tmp)]
     print(markdown_table(result))
     log.info(f"wrote {', '.join(str(p) for p in paths)} in {time.perf_counter() - t0:.0f} s")
     return 0

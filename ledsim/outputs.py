@@ -1,0 +1,54 @@
+"""All-or-nothing output folders: a command's files appear together, or not at all."""
+
+from __future__ import annotations
+
+import os
+import shutil
+import tempfile
+from collections.abc import Iterator
+from contextlib import contextmanager
+from pathlib import Path
+
+from .errors import LedsimError
+
+
+def check_out_dir(path: str | Path, flag: str = "--out") -> Path:
+    """Refuse, before any work, a folder that could not be written: an existing file, or
+    a path whose nearest existing parent is not a writable folder. Creates nothing."""
+    out = Path(path)
+    if out.exists() and not out.is_dir():
+        raise LedsimError(f"{flag} {str(path)!r} exists and is not a folder")
+    probe = out
+    while not probe.exists():
+        probe = probe.parent
+    if not probe.is_dir() or not os.access(probe, os.W_OK | os.X_OK):
+        raise LedsimError(f"{flag} {str(path)!r} cannot be written: {str(probe)!r} is not a "
+                          "writable folder")
+    return out
+
+
+@contextmanager
+def output_folder(out: str | Path) -> Iterator[Path]:
+    """Yield a private folder to write into; on success its entries move into ``out``.
+
+    Everything is written beside ``out`` under a unique temporary name, so an error or
+    an interrupt leaves ``out`` as it was, and two runs to the same ``out`` never share
+    a file. A new ``out`` appears in one rename.
+    """
+    out = Path(out)
+    out.parent.mkdir(parents=True, exist_ok=True)
+    tmp = Path(tempfile.mkdtemp(dir=out.parent, prefix=f".{out.name}.", suffix=".partial"))
+    try:
+        yield tmp
+    except BaseException:
+        shutil.rmtree(tmp, ignore_errors=True)
+        raise
+    if not out.exists():
+        os.replace(tmp, out)
+        return
+    for entry in tmp.iterdir():
+        dest = out / entry.name
+        if dest.is_dir() and entry.is_dir():
+            shutil.rmtree(dest)
+        os.replace(entry, dest)
+    tmp.rmdir()
