@@ -206,3 +206,13 @@ def test_knobs_reach_the_compiled_model():
     n1, n2 = w.photodiode_normal(0), w.photodiode_normal(1)
     assert math.acos(n1 @ n2) == pytest.approx(0.2, abs=1e-12)
     assert w.set_torque(1.0) == 0.02  # clipped at the limit
+
+
+def test_unstable_physics_is_an_error_and_leaves_no_log_file(tmp_path, monkeypatch):
+    monkeypatch.chdir(tmp_path)
+    w = LinkWorld()
+    w.reset()
+    w.add_hull_wrench(force=(1e300, 0.0, 0.0))
+    with pytest.raises(WorldError, match="unstable"):
+        w.step()
+    assert not (tmp_path / "MUJOCO_LOG.TXT").exists()

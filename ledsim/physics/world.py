@@ -26,6 +26,7 @@ cast_rays                where rays from a point are stopped          m
 
 from __future__ import annotations
 
+import logging
 import math
 from contextlib import contextmanager
 
@@ -37,12 +38,23 @@ from .scene import SCENE, WorldConfig, WorldError, build_spec
 __all__ = ["LinkWorld", "WorldConfig", "WorldError", "SCENE"]
 
 RAY_GROUPS = np.array([1, 1, 1, 0, 0, 0], dtype=np.uint8)  # groups 0-2 block light
+_UNSTABLE = (mujoco.mjtWarning.mjWARN_BADQACC, mujoco.mjtWarning.mjWARN_BADQVEL,
+             mujoco.mjtWarning.mjWARN_BADQPOS)
+_log = logging.getLogger("ledsim.mujoco")
+
+
+def _route_mujoco_warnings() -> None:
+    """Send MuJoCo's warnings to Python logging instead of MUJOCO_LOG.TXT in the working
+    folder (only if nobody installed a handler before)."""
+    if mujoco.get_mju_user_warning() is None:
+        mujoco.set_mju_user_warning(lambda msg: _log.warning("MuJoCo: %s", msg.strip()))
 
 
 class LinkWorld:
     """The compiled scene plus named accessors; see the module docstring."""
 
     def __init__(self, config: WorldConfig | None = None):
+        _route_mujoco_warnings()
         self.config = config or WorldConfig()
         self.spec = build_spec(self.config)
         try:
@@ -99,8 +111,16 @@ class LinkWorld:
         mujoco.mj_forward(self.model, self.data)
 
     def step(self, n: int | None = None) -> None:
-        """Advance ``n`` physics steps (default: one control period Te)."""
+        """Advance ``n`` physics steps (default: one control period Te).
+
+        Raises :class:`WorldError` if the physics became unstable (MuJoCo would otherwise
+        reset the state silently and go on)."""
         mujoco.mj_step(self.model, self.data, nstep=n or self.config.substeps)
+        warning = self.data.warning
+        if warning[_UNSTABLE[0]].number or warning[_UNSTABLE[1]].number or \
+                warning[_UNSTABLE[2]].number:
+            raise WorldError(f"the physics became unstable at t = {self.time:.3f} s "
+                             "(forces or speeds out of range): reduce the disturbance")
 
     def forward_kinematics(self) -> None:
         """Poses and velocities of every body and site from the current qpos, qvel and
