@@ -12,3 +12,5 @@ def test_readme_python_example_runs(capsys):
         exec(compile(code, "README.md", "exec"), {})
     out = capsys.readouterr().out
     assert "kkl" in out and "(200, 2) [ True  True]" in out
+    ret = int(out.split("return ")[1].split()[0])
+    assert 900 < ret <= 1000
