@@ -5,8 +5,12 @@ Measured against each other by ``scripts/ablation.py`` (numbers in ``docs/observ
 
 from __future__ import annotations
 
+from typing import TYPE_CHECKING
+
 from observer.kkl import KKLDesign
-from observer.training import TrainingConfig
+
+if TYPE_CHECKING:  # torch is imported only when training
+    from observer.training import TrainingConfig
 
 from .errors import LedsimError
 
@@ -26,6 +30,8 @@ def observer_preset(name: str, Te: float) -> tuple[KKLDesign, TrainingConfig]:
     least-squares output layers, and a decoder trained on the z noise it will see.
     ``"low-light"``: the default with slower filters and 1000-unit maps: lower RMSE on
     weak links, but slower to forget its initial guess (``docs/observer.md``)."""
+    from observer.training import TrainingConfig
+
     if name == "paper":
         return KKLDesign.paper(Te), TrainingConfig(
             output_solve=False, encoder_epochs=30, decoder_epochs=30, decoder_noise="none")

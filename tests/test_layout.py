@@ -101,3 +101,18 @@ def test_the_paper_world_runs_without_mujoco():
     r = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True,
                        cwd=ROOT, timeout=300)
     assert r.returncode == 0 and "ok" in r.stdout, r.stderr
+
+
+def test_torch_is_imported_only_when_needed():
+    """The CLI and a filter-driven run never import torch (2-3 s of start-up)."""
+    code = ("import sys\n"
+            "from ledsim.cli import build_parser\n"
+            "build_parser()\n"
+            "from ledsim.loop.closed_loop import run_once\n"
+            "from ledsim.loop.config import RunConfig\n"
+            "run_once(RunConfig(estimator='ekf', seconds=0.1), 0)\n"
+            "assert 'torch' not in sys.modules, 'torch was imported'\n"
+            "print('ok')\n")
+    r = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True,
+                       cwd=ROOT, timeout=300)
+    assert r.returncode == 0 and "ok" in r.stdout, r.stderr
