@@ -90,29 +90,27 @@ def test_the_rules_catch_a_violation(tmp_path):
     assert "mujoco" in found and "ledsim.physics.world" in found
 
 
+def assert_not_imported(module: str, code: str) -> None:
+    """Run ``code`` in a fresh interpreter and check it never imported ``module``."""
+    code = f"import sys\n{code}assert {module!r} not in sys.modules, '{module} imported'\n"
+    r = subprocess.run([sys.executable, "-c", code + "print('ok')\n"], capture_output=True,
+                       text=True, cwd=ROOT, timeout=300)
+    assert r.returncode == 0 and "ok" in r.stdout, r.stderr
+
+
 def test_the_paper_world_runs_without_mujoco():
     """Evaluating a paper scenario never loads mujoco (checked in a fresh interpreter)."""
-    code = ("import sys\n"
-            "from ledsim.paper.evaluate import EvaluationConfig, evaluate\n"
-            "evaluate(EvaluationConfig(scenario='if1', seeds=1, starts=0, workers=1,\n"
-            "                          estimators=('kkl', 'ekf')), progress=False)\n"
-            "assert 'mujoco' not in sys.modules, 'mujoco was imported'\n"
-            "print('ok')\n")
-    r = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True,
-                       cwd=ROOT, timeout=300)
-    assert r.returncode == 0 and "ok" in r.stdout, r.stderr
+    assert_not_imported("mujoco",
+                        "from ledsim.paper.evaluate import EvaluationConfig, evaluate\n"
+                        "evaluate(EvaluationConfig(scenario='if1', seeds=1, starts=0, workers=1,"
+                        " estimators=('kkl', 'ekf')), progress=False)\n")
 
 
 def test_torch_is_imported_only_when_needed():
     """The CLI and a filter-driven run never import torch (2-3 s of start-up)."""
-    code = ("import sys\n"
-            "from ledsim.cli import build_parser\n"
-            "build_parser()\n"
-            "from ledsim.loop.closed_loop import run_once\n"
-            "from ledsim.loop.config import RunConfig\n"
-            "run_once(RunConfig(estimator='ekf', seconds=0.1), 0)\n"
-            "assert 'torch' not in sys.modules, 'torch was imported'\n"
-            "print('ok')\n")
-    r = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True,
-                       cwd=ROOT, timeout=300)
-    assert r.returncode == 0 and "ok" in r.stdout, r.stderr
+    assert_not_imported("torch",
+                        "from ledsim.cli import build_parser\n"
+                        "build_parser()\n"
+                        "from ledsim.loop.closed_loop import run_once\n"
+                        "from ledsim.loop.config import RunConfig\n"
+                        "run_once(RunConfig(estimator='ekf', seconds=0.1), 0)\n")
