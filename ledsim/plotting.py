@@ -124,3 +124,25 @@ def plot_run(trace, title: str, estimator: str, path: Path) -> Path:
     axes[0].set_title(title)
     fig.tight_layout()
     return _save(fig, path)
+
+
+def plot_powers_by_distance(traces: dict, Te: float, title: str, path: Path) -> Path:
+    """Measured, true and predicted powers at several link distances, overlaid (paper
+    Figs. 9-11). ``traces`` maps a distance [m] to a closed-form ``Trajectory``."""
+    plt = _pyplot()
+    fig, axes = plt.subplots(2, 1, figsize=(8, 6.5), sharex=True)
+    for c, (d, tr) in enumerate(sorted(traces.items())):
+        t = np.arange(len(tr.x)) * Te
+        for i, ax in enumerate(axes):
+            ax.plot(t, tr.y[:, i], color=f"C{c}", lw=0.4, alpha=0.3)
+            ax.plot(t, tr.y_clean[:, i], color=f"C{c}", lw=2, label=f"true, d = {d:g} m")
+            ax.plot(t, tr.yhat[:, i], "k--", lw=0.9,
+                    label="predicted h(x_hat), KKL" if c == 0 else None)
+    for i, ax in enumerate(axes):
+        ax.set_ylabel(f"P{i + 1} [W]")
+        ax.grid(alpha=0.3)
+    axes[0].legend(fontsize=8, ncol=2)
+    axes[0].set_title(title)
+    axes[1].set_xlabel("time [s]")
+    fig.tight_layout()
+    return _save(fig, path)
