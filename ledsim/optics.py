@@ -81,3 +81,15 @@ def peak_power(c: LinkConstants) -> float:
     """Largest power one photodiode can see at the configured distance and theta [W]."""
     phi = np.linspace(-np.pi / 2, np.pi / 2, 20001)
     return float(np.max(photodiode_power(c.distance, c.theta, phi, c)))
+
+
+#: Measured powers beyond this many noise standard deviations below zero, or above twice
+#: the peak, cannot come from the link: estimators treat them as missing.
+IMPOSSIBLE_SIGMAS = 20.0
+
+
+def plausible_power_range(c: LinkConstants) -> tuple[np.ndarray, np.ndarray]:
+    """(low, high) of physically possible measured powers of the two photodiodes [W]."""
+    sigma = c.measurement_noise_std
+    return (np.full(2, -IMPOSSIBLE_SIGMAS * sigma),
+            np.full(2, 2.0 * peak_power(c) + IMPOSSIBLE_SIGMAS * sigma))

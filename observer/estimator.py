@@ -3,8 +3,9 @@
 At step k the loop calls ``update(y_k)`` (returns the estimate of x_k), the controller
 picks ``u_k`` from it, then ``predict(u_k)`` moves the estimator to k+1.
 
-Missing measurements: a component of ``y`` that is NaN or inf never enters the state
-of an estimator. The Kalman-type filters and the particle filter skip that component in
+Missing measurements: a component of ``y`` that is NaN or inf, or physically impossible
+(outside the system's ``output_low``..``output_high``), never enters the state of an
+estimator. The Kalman-type filters and the particle filter skip that component in
 the update; the KKL observer replaces it by its own prediction h(x_hat) ("hold the
 prediction"), so z keeps moving along the model (see ``docs/observer.md``).
 """
@@ -52,8 +53,18 @@ class Estimator(ABC):
 
 
 def finite_mask(y: np.ndarray) -> np.ndarray:
-    """Which components of ``y`` are usable measurements."""
+    """Which components of ``y`` are finite."""
     return np.isfinite(np.asarray(y, dtype=float))
+
+
+def usable_mask(system: DiscreteSystem, y: np.ndarray) -> np.ndarray:
+    """Which components of ``y`` are usable: finite and physically possible for
+    ``system`` (``output_low``..``output_high``). The others are treated as missing."""
+    y = np.asarray(y, dtype=float)
+    ok = np.isfinite(y)
+    if system.output_low is not None:
+        ok &= (y >= system.output_low) & (y <= system.output_high)
+    return ok
 
 
 class GaussianFilter(Estimator):

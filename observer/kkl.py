@@ -16,7 +16,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from .errors import ObserverError
-from .estimator import Estimator, finite_mask
+from .estimator import Estimator, usable_mask
 from .nets import NumpyMLP
 from .system import DiscreteSystem
 
@@ -165,8 +165,8 @@ class KKLObserver(Estimator):
     def update(self, y) -> np.ndarray:
         y = np.asarray(y, dtype=float)
         self._xhat = self.decoder_T_star.vector(self.z)
-        if not np.isfinite(y).all():
-            ok = finite_mask(y)
+        ok = usable_mask(self.system, y)
+        if not ok.all():
             # Hold the prediction: a missing power is replaced by h(x_hat).
             y = np.where(ok, y, self.system.h(self._xhat))
         self._y = y
@@ -201,7 +201,8 @@ class KKLObserver(Estimator):
         n_steps, n_traj, _ = ys.shape
         guess = self.system.domain_center if x0 is None else x0
         z = self.encode(np.broadcast_to(guess, (n_traj, self.system.n_state)))
-        has_missing = not np.isfinite(ys).all()
+        usable = usable_mask(self.system, ys)
+        has_missing = not usable.all()
         if us is None and not has_missing:
             # Linear recursion first, then one large decode: the fast path.
             zs = np.empty((n_steps, n_traj, self.q))
@@ -219,7 +220,7 @@ class KKLObserver(Estimator):
             out[k] = xh
             y = ys[k]
             if has_missing:
-                y = np.where(np.isfinite(y), y, self.system.h(xh))
+                y = np.where(usable[k], y, self.system.h(xh))
             z_next = self.eigenvalues * z + y @ self.B.T
             if us is not None and self.omega:
                 z_next += self.omega_correction(z, us[k], xh)

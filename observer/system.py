@@ -45,6 +45,10 @@ class DiscreteSystem(ABC):
     measurement_noise_std: np.ndarray
     state_names: tuple[str, ...] = ()
     output_names: tuple[str, ...] = ()
+    #: Physically possible measurements, shape ``(n_output,)`` each (None: any finite
+    #: value). Estimators treat a measurement outside as missing, like a dropout.
+    output_low: np.ndarray | None = None
+    output_high: np.ndarray | None = None
 
     @abstractmethod
     def f(self, x: np.ndarray, u: np.ndarray | float) -> np.ndarray:

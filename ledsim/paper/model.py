@@ -16,7 +16,7 @@ import numpy as np
 from observer.system import DiscreteSystem
 
 from ..config import LinkConstants
-from ..optics import pair_power, pair_power_jacobian, transmitter_gain
+from ..optics import pair_power, pair_power_jacobian, plausible_power_range, transmitter_gain
 
 
 class LEDLinkModel(DiscreteSystem):
@@ -49,6 +49,7 @@ class LEDLinkModel(DiscreteSystem):
         self.process_noise_std = np.array(c.process_noise_std, dtype=float)
         self.measurement_noise_std = np.full(2, c.measurement_noise_std)
         self.cp_bar = float(transmitter_gain(c.distance, c.theta, c))
+        self.output_low, self.output_high = plausible_power_range(c)
         self._F = np.array([[1.0, c.Te], [0.0, 1.0]])
 
     def f(self, x, u=0.0):

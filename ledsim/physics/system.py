@@ -31,7 +31,7 @@ import numpy as np
 
 from observer.system import DiscreteSystem
 
-from ..optics import pair_power, pair_power_jacobian
+from ..optics import pair_power, pair_power_jacobian, plausible_power_range
 from .sensor import IrradianceSensor
 from .world import LinkWorld, WorldConfig
 
@@ -57,6 +57,7 @@ class GimbalSystem(DiscreteSystem):
         self.domain_low = -self.domain_high
         self.process_noise_std = np.array(c.process_noise_std, dtype=float)
         self.measurement_noise_std = np.full(2, c.measurement_noise_std)
+        self.output_low, self.output_high = plausible_power_range(c)
         self.inertia = self.world.hinge_inertia()
         self.world.reset()
         self.phi_home = float(self.sensor.geometry()[2][0])  # phi at gimbal angle 0
@@ -128,6 +129,7 @@ class IdentifiedGimbalModel(DiscreteSystem):
         self.domain_low, self.domain_high = source.domain_low, source.domain_high
         self.process_noise_std = source.process_noise_std
         self.measurement_noise_std = source.measurement_noise_std
+        self.output_low, self.output_high = source.output_low, source.output_high
         self.coef_phi = np.asarray(coef_phi, dtype=float)
         self.coef_rate = np.asarray(coef_rate, dtype=float)
         self.power_gain = float(power_gain)

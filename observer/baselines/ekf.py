@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from ..estimator import GaussianFilter, finite_mask
+from ..estimator import GaussianFilter, usable_mask
 
 
 class ExtendedKalmanFilter(GaussianFilter):
@@ -19,7 +19,7 @@ class ExtendedKalmanFilter(GaussianFilter):
 
     def update(self, y) -> np.ndarray:
         y = np.asarray(y, dtype=float)
-        ok = finite_mask(y)
+        ok = usable_mask(self.system, y)
         if ok.any():
             H = self.system.h_jacobian(self.x)[ok]
             innov = (y - self.system.h(self.x))[ok]

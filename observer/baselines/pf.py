@@ -5,7 +5,7 @@ from __future__ import annotations
 import numpy as np
 
 from ..errors import ObserverError
-from ..estimator import Estimator, finite_mask
+from ..estimator import Estimator, usable_mask
 from ..system import DiscreteSystem
 
 
@@ -52,7 +52,7 @@ class ParticleFilter(Estimator):
 
     def update(self, y) -> np.ndarray:
         y = np.asarray(y, dtype=float)
-        ok = finite_mask(y)
+        ok = usable_mask(self.system, y)
         if ok.any():
             r = self.system.h(self.particles)[:, ok] - y[ok]
             self.logw = self.logw - 0.5 * (r**2 @ self.inv_R[ok])

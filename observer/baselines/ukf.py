@@ -4,8 +4,18 @@ from __future__ import annotations
 
 import numpy as np
 
-from ..estimator import GaussianFilter, finite_mask
+from ..estimator import GaussianFilter, usable_mask
 from ..system import DiscreteSystem
+
+
+def nearest_covariance(P: np.ndarray, floor: float = 1e-12) -> np.ndarray:
+    """The symmetric matrix nearest to ``P`` with eigenvalues >= ``floor`` x its scale."""
+    S = 0.5 * (P + P.T)
+    if not np.all(np.isfinite(S)):
+        raise np.linalg.LinAlgError("covariance is not finite")
+    w, V = np.linalg.eigh(S)
+    w = np.maximum(w, floor * max(float(np.abs(w).max()), 1e-300))
+    return (V * w) @ V.T
 
 
 class UnscentedKalmanFilter(GaussianFilter):
@@ -31,12 +41,16 @@ class UnscentedKalmanFilter(GaussianFilter):
 
     def sigma_points(self) -> np.ndarray:
         n = self.x.size
-        L = np.linalg.cholesky((n + self.lam) * self.P)
+        try:
+            L = np.linalg.cholesky((n + self.lam) * self.P)
+        except np.linalg.LinAlgError:  # P lost positive definiteness to round-off
+            self.P = nearest_covariance(self.P)
+            L = np.linalg.cholesky((n + self.lam) * self.P)
         return np.vstack([self.x, self.x + L.T, self.x - L.T])
 
     def update(self, y) -> np.ndarray:
         y = np.asarray(y, dtype=float)
-        ok = finite_mask(y)
+        ok = usable_mask(self.system, y)
         if ok.any():
             X = self.sigma_points()
             Y = self.system.h(X)[:, ok]
