@@ -4,6 +4,7 @@
     ledsim/paper     the closed-form world; never mujoco, never physics or loop
     ledsim/physics   the MuJoCo world; never loop, paper or cli
     ledsim/loop      the closed loop; never paper or cli
+    ledsim/envs      the Gymnasium environment; never paper or cli
     ledsim/*.py      shared pieces; never a subpackage (the CLI excepted)
 """
 
@@ -22,6 +23,7 @@ FORBIDDEN = {
     "ledsim.paper": ("mujoco", "ledsim.physics", "ledsim.loop", "ledsim.cli"),
     "ledsim.physics": ("ledsim.loop", "ledsim.paper", "ledsim.cli"),
     "ledsim.loop": ("ledsim.paper", "ledsim.cli"),
+    "ledsim.envs": ("ledsim.paper", "ledsim.cli"),
     "ledsim": ("ledsim.physics", "ledsim.loop", "ledsim.paper", "ledsim.cli", "mujoco"),
 }
 
