@@ -1,0 +1,49 @@
+"""The wheel carries its scene and checkpoints and runs from any folder."""
+
+import os
+import subprocess
+import sys
+import zipfile
+from pathlib import Path
+
+import pytest
+
+ROOT = Path(__file__).resolve().parent.parent
+
+
+@pytest.fixture(scope="module")
+def wheel(tmp_path_factory):
+    out = tmp_path_factory.mktemp("wheel")
+    r = subprocess.run([sys.executable, "-m", "pip", "wheel", "--no-deps",
+                        "--no-build-isolation", "-q", "-w", str(out), str(ROOT)],
+                       capture_output=True, text=True, timeout=600)
+    assert r.returncode == 0, r.stderr
+    (path,) = out.glob("ledsim-*.whl")
+    return path
+
+
+def test_wheel_holds_the_scene_and_every_checkpoint(wheel):
+    names = set(zipfile.ZipFile(wheel).namelist())
+    assert "ledsim/physics/led_link.xml" in names
+    shipped = {p.name for p in (ROOT / "ledsim" / "assets" / "checkpoints").iterdir()}
+    assert {f"ledsim/assets/checkpoints/{n}" for n in shipped} <= names
+
+
+def test_installed_wheel_runs_from_another_folder(wheel, tmp_path):
+    target = tmp_path / "site"
+    r = subprocess.run([sys.executable, "-m", "pip", "install", "-q", "--no-deps",
+                        "--target", str(target), str(wheel)], capture_output=True, text=True,
+                       timeout=600)
+    assert r.returncode == 0, r.stderr
+    env = {k: v for k, v in os.environ.items() if k != "MUJOCO_GL"}
+    env["PYTHONPATH"] = str(target)
+    work = tmp_path / "elsewhere"
+    work.mkdir()
+    r = subprocess.run([sys.executable, "-m", "ledsim", "run", "--estimator", "kkl", "--seeds",
+                        "1", "--seconds", "2", "--quiet", "--out", "res"], cwd=work, env=env,
+                       capture_output=True, text=True, timeout=600)
+    assert r.returncode == 0, r.stderr
+    assert (work / "res" / "results.json").is_file()
+    r = subprocess.run([sys.executable, "-c", "import ledsim; print(ledsim.__file__)"],
+                       cwd=work, env=env, capture_output=True, text=True)
+    assert r.stdout.startswith(str(target))
