@@ -15,7 +15,8 @@ PAPER_ESTIMATORS = [n for n in ESTIMATORS if n != "oracle"]
 SHORT_SPECS = {"occlusion": "occlusion:start=0.3,duration=0.3",
                "current": "current:speed=0.1,gust=0.05",
                "vibration": "vibration:frequency=3,torque=1,force=4",
-               "transmitter": "transmitter:sway=0.01,frequency=1,yaw=0.05"}
+               "transmitter": "transmitter:sway=0.01,frequency=1,yaw=0.05",
+               "kick": "kick:start=0.5,rate=2"}
 
 
 def test_every_disturbance_has_a_short_spec():

@@ -12,6 +12,7 @@ vibration         sinusoidal yaw torque and sway force on the AUV hull
 current           water current: steady velocity plus random gusts (opt.wind)
 transmitter       the LED platform sways sideways and rotates (yaw)
 occlusion         a plate crosses the line of sight for ``duration`` seconds
+kick              an angular-rate impulse to the gimbal or the hull at ``start``
 ================  ============================================================
 """
 
@@ -192,18 +193,53 @@ RANGES = {
     "gust": (0.0, 2.0, "m/s", False),
     "gust_time": (0.0, 100.0, "s", True),
     "hold": (0.0, 1.0, "(0 or 1)", False),
+    "hull": (0.0, 1.0, "(0 or 1)", False),
     "seed": (0, 2**32 - 1, "", False),
     "sway": (-0.1, 0.1, "m", False),
     "yaw": (-math.pi / 2, math.pi / 2, "rad", False),
     "start": (0.0, 3600.0, "s", False),
+    "rate": (-50.0, 50.0, "rad/s", False),
     "duration": (0.0, 3600.0, "s", True),
 }
+
+@dataclass
+class Kick(Disturbance):
+    """An angular-rate impulse at time ``start``: the gimbal (``hull=0``) or the AUV's
+    yaw (``hull=1``) suddenly turns ``rate`` faster, as when the vehicle is struck; strong
+    enough by default to throw the receiver out of the observers' domain.
+
+    Attributes:
+        start: time of the impulse [s].
+        rate: added angular rate [rad/s].
+        hull: 0 = the gimbal hinge, 1 = the hull's yaw.
+    """
+
+    start: float = 3.0
+    rate: float = 8.0
+    hull: float = 0.0
+
+    def __post_init__(self):
+        self._done = False
+
+    def reset(self, seed: int) -> None:
+        self._done = False
+
+    def apply(self, world: LinkWorld, t: float) -> None:
+        if not self._done and t >= self.start:
+            world.add_angular_rate(self.rate, hull=bool(self.hull))
+            self._done = True
+
+    @property
+    def event_end(self) -> float:
+        return self.start
+
 
 DISTURBANCES = {
     "vibration": HullVibration,
     "current": WaterCurrent,
     "transmitter": TransmitterMotion,
     "occlusion": Occlusion,
+    "kick": Kick,
 }
 
 
@@ -232,8 +268,10 @@ def parse_disturbance(text: str) -> Disturbance:
             raise DisturbanceError(f"{name}.{key}={value} is not allowed: must be in "
                                    f"{'(' if lo_open else '['}{lo:.4g}, {hi:.4g}] {unit}"
                                    .rstrip())
-    if name == "current" and kwargs.get("hold", 1.0) not in (0.0, 1.0):
-        raise DisturbanceError(f"current.hold={kwargs['hold']!r} is not allowed: must be 0 or 1")
+    for key in ("hold", "hull"):
+        if kwargs.get(key, 0.0) not in (0.0, 1.0):
+            raise DisturbanceError(f"{name}.{key}={kwargs[key]!r} is not allowed: must be 0 "
+                                   "or 1")
     return cls(**kwargs)
 
 

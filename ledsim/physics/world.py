@@ -74,6 +74,7 @@ class LinkWorld:
         self._hinge_qpos = hinge.qposadr[0]
         self._hinge_dof = hinge.dofadr[0]
         self._motor = m.actuator("gimbal_motor").id
+        self._hull_dof = m.jnt_dofadr[m.body_jntadr[self._auv]]  # the free joint's first dof
         self._set_hull_buoyancy()
         self.transmitter_home = self.data.mocap_pos[self._tx_mocap].copy()
         self.occluder_home = self.data.mocap_pos[self._occluder_mocap].copy()
@@ -152,6 +153,14 @@ class LinkWorld:
         applied = min(max(float(torque), -lim), lim)
         self.data.ctrl[self._motor] = applied
         return applied
+
+    def add_angular_rate(self, rate: float, hull: bool = False) -> None:
+        """An angular-rate impulse [rad/s] about the vertical: to the gimbal hinge, or
+        (``hull``) to the AUV's yaw."""
+        if hull:
+            self.data.qvel[self._hull_dof + 5] += rate  # free joint: (v, omega), omega z
+        else:
+            self.data.qvel[self._hinge_dof] += rate
 
     def hinge_inertia(self) -> float:
         """Gimbal inertia about its hinge incl. armature [kg m^2] (MuJoCo's mass matrix)."""
