@@ -125,6 +125,9 @@ def test_run_seconds_sets_the_length_of_a_run(tmp_path):
                  "--no-plot", "--out", str(out)]) == 0
     res = json.loads((out / "results.json").read_text())
     assert res["seconds"] == 2.5 and not (out / "run.png").exists()
+    # The steady-state window (from 5 s) is empty: undefined, not NaN.
+    assert res["rmse_steady_x1"] == {"mean": None, "std": None, "n": 0}
+    assert res["rmse_x1"]["n"] == 1
 
 
 def test_version_and_help_list_choices_and_defaults(capsys):

@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import math
 from collections.abc import Callable
 from dataclasses import dataclass
 from pathlib import Path
@@ -19,7 +20,8 @@ from .config import RunConfig
 @dataclass
 class Stat(DictAccess):
     """Mean and sample standard deviation over the seeds that have a value, and how
-    many did (``n``); ``mean`` is None when none did."""
+    many did (``n``); ``mean`` is None when none did. NaN means undefined (an empty
+    steady-state window in a short run) and counts as no value."""
 
     mean: float | None
     std: float | None
@@ -27,7 +29,7 @@ class Stat(DictAccess):
 
     @classmethod
     def over(cls, values) -> Stat:
-        vals = [v for v in values if v is not None]
+        vals = [v for v in values if v is not None and not math.isnan(v)]
         if not vals:
             return cls(None, None, 0)
         mean, spread = mean_and_spread(np.array(vals, dtype=float))
