@@ -1,0 +1,50 @@
+"""Interrupted commands leave nothing behind: no output, no temporary file, exit 130."""
+
+import signal
+import subprocess
+import sys
+import time
+
+import pytest
+
+COMMANDS = {
+    "run": ["run", "--estimator", "ekf", "--seeds", "4", "--workers", "2", "--seconds", "30",
+            "--out", "{out}"],
+    "evaluate": ["evaluate", "--scenario", "if1", "--seeds", "20", "--workers", "2",
+                 "--out", "{out}"],
+    "simulate": ["simulate", "--seconds", "3600", "--out", "{out}"],
+    "demo": ["demo", "--seeds", "4", "--out", "{out}"],
+    "render": ["render", "--seconds", "30", "--width", "160", "--height", "120",
+               "--out", "{out}.mp4"],
+    "train": ["train", "--samples", "400000", "--out", "{out}.pt"],
+}
+
+
+@pytest.mark.parametrize("name", list(COMMANDS))
+def test_sigint_leaves_nothing_behind(tmp_path, name):
+    out = tmp_path / "result"
+    args = [a.format(out=out) for a in COMMANDS[name]]
+    proc = subprocess.Popen([sys.executable, "-m", "ledsim.cli", *args, "--quiet"],
+                            stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
+    time.sleep(4.0)  # well into the work
+    assert proc.poll() is None, f"{name} finished before the interrupt: {proc.communicate()}"
+    proc.send_signal(signal.SIGINT)
+    _, err = proc.communicate(timeout=120)
+    assert proc.returncode == 130, err
+    assert "Traceback" not in err and "interrupted" in err
+    assert list(tmp_path.iterdir()) == [], sorted(p.name for p in tmp_path.iterdir())
+
+
+def test_two_renders_to_one_file_never_share_a_temporary(tmp_path):
+    import imageio.v3 as iio
+
+    out = tmp_path / "clip.mp4"
+    procs = [subprocess.Popen([sys.executable, "-m", "ledsim.cli", "render", "--seconds", s,
+                               "--width", "160", "--height", "120", "--fps", "10", "--quiet",
+                               "--out", str(out)], stderr=subprocess.PIPE, text=True)
+             for s in ("1.0", "1.5")]
+    for p in procs:
+        _, err = p.communicate(timeout=300)
+        assert p.returncode == 0, err
+    assert iio.imread(out).shape[0] in (10, 15)  # one whole video, not a mix
+    assert [p.name for p in tmp_path.iterdir()] == ["clip.mp4"]
