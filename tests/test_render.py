@@ -108,3 +108,13 @@ def test_missing_gl_library_names_the_fix(monkeypatch):
     with pytest.raises(RenderError, match="apt-get install libosmesa6") as info:
         render.make_renderer(LinkWorld(), 320, 240)
     assert "\n" not in str(info.value)
+
+
+def test_overlay_axes_follow_the_data():
+    from ledsim.physics.render import follow
+
+    assert follow((), (-0.5, 0.5), 0.05) == (-0.5, 0.5)
+    lo, hi = follow(([0.01, 0.02], [0.015, float("nan")]), (-0.5, 0.5), 0.05)
+    assert lo < 0.01 and hi > 0.02 and hi - lo == pytest.approx(0.05)  # the floor applies
+    lo, hi = follow(([-1.0, 2.0],), (-0.5, 0.5), 0.05)
+    assert lo < -1.0 and hi > 2.0 and hi - lo < 3.5

@@ -96,6 +96,18 @@ def blocking_points(world: LinkWorld) -> list[np.ndarray | None]:
     return points
 
 
+def follow(series, default: tuple[float, float], floor: float) -> tuple[float, float]:
+    """Axis limits that follow the data shown (finite values, 10% margin), never narrower
+    than ``floor``; ``default`` until there is data."""
+    values = np.concatenate([np.asarray(v, dtype=float) for v in series]) if series else []
+    values = values[np.isfinite(values)] if len(values) else values
+    if len(values) == 0:
+        return default
+    lo, hi = float(values.min()), float(values.max())
+    mid, half = 0.5 * (lo + hi), max(0.55 * (hi - lo), 0.5 * floor)
+    return mid - half, mid + half
+
+
 class Overlay:
     """Panel with the time and scrolling traces of phi (true, estimated) and P1, P2."""
 
@@ -125,15 +137,16 @@ class Overlay:
         boxes = [(8, y0 + 22, half - 8, self.h - 8), (half + 8, y0 + 22, self.w - 8, self.h - 8)]
         for box in boxes:
             d.rectangle(box, outline=(90, 110, 120))
-        self._trace(d, boxes[0], self.phi, (-0.5, 0.5), (255, 255, 255))
-        self._trace(d, boxes[0], self.phihat, (-0.5, 0.5), (80, 200, 255))
-        top = 1.1 * peak_power
-        self._trace(d, boxes[1], self.p1, (0.0, top), (80, 200, 255))
-        self._trace(d, boxes[1], self.p2, (0.0, top), (255, 170, 60))
-        d.text((8, y0 + 4), "phi [rad]: true (white)  estimate (blue)", fill=(230, 230, 230),
-               font=self.font)
-        d.text((half + 8, y0 + 4), "power [W]: P1 (blue)  P2 (orange)", fill=(230, 230, 230),
-               font=self.font)
+        lim_phi = follow((self.phi, self.phihat), (-0.5, 0.5), floor=0.05)
+        self._trace(d, boxes[0], self.phi, lim_phi, (255, 255, 255))
+        self._trace(d, boxes[0], self.phihat, lim_phi, (80, 200, 255))
+        lim_p = follow((self.p1, self.p2), (0.0, 1.1 * peak_power), floor=0.1 * peak_power)
+        self._trace(d, boxes[1], self.p1, lim_p, (80, 200, 255))
+        self._trace(d, boxes[1], self.p2, lim_p, (255, 170, 60))
+        d.text((8, y0 + 4), f"phi [rad] {lim_phi[0]:+.2f}..{lim_phi[1]:+.2f}: true (white) "
+               "estimate (blue)", fill=(230, 230, 230), font=self.font)
+        d.text((half + 8, y0 + 4), f"power [W] {lim_p[0]:.2f}..{lim_p[1]:.2f}: P1 (blue) "
+               "P2 (orange)", fill=(230, 230, 230), font=self.font)
         d.text((8, 6), f"t = {t:5.2f} s   {self.label}", fill=(255, 255, 255), font=self.font)
         return np.asarray(img)
 
