@@ -27,6 +27,20 @@ def check_out_dir(path: str | Path, flag: str = "--out") -> Path:
     return out
 
 
+def check_out_file(path: str | Path, suffix: str, flag: str = "--out") -> Path:
+    """Refuse an output file that could not be written, before any work is done."""
+    out = Path(path)
+    if out.is_dir():
+        raise LedsimError(f"{flag} {str(path)!r} is a folder, not a file")
+    if out.suffix.lower() != suffix:
+        raise LedsimError(f"{flag} {str(path)!r}: the file must end in {suffix}")
+    parent = out.parent
+    if not parent.is_dir() or not os.access(parent, os.W_OK):
+        raise LedsimError(f"{flag} {str(path)!r}: folder {str(parent)!r} does not exist or is not "
+                          "writable")
+    return out
+
+
 @contextmanager
 def output_folder(out: str | Path) -> Iterator[Path]:
     """Yield a private folder to write into; on success its entries move into ``out``.

@@ -13,23 +13,9 @@ import time
 from pathlib import Path
 
 from ..errors import LedsimError
-from ..outputs import check_out_dir, output_folder
+from ..outputs import check_out_dir, check_out_file, output_folder
 
 log = logging.getLogger("ledsim")
-
-
-def _check_out_file(path: str, suffix: str) -> Path:
-    """Refuse an output file that could not be written, before any work is done."""
-    out = Path(path)
-    if out.is_dir():
-        raise LedsimError(f"--out {path!r} is a folder, not a file")
-    if out.suffix.lower() != suffix:
-        raise LedsimError(f"--out {path!r}: the file must end in {suffix}")
-    parent = out.parent
-    if not parent.is_dir() or not os.access(parent, os.W_OK):
-        raise LedsimError(f"--out {path!r}: folder {str(parent)!r} does not exist or is not "
-                          "writable")
-    return out
 
 
 def _loop_config(args, **kw):
@@ -148,7 +134,7 @@ def render(args) -> int:
     for flag, value in (("--fps", args.fps), ("--seconds", args.seconds)):
         if not value > 0:
             raise LedsimError(f"{flag} {value!r} is not allowed: must be > 0")
-    out = _check_out_file(args.out, ".mp4")
+    out = check_out_file(args.out, ".mp4")
     from ..loop.video import VideoSpec, check_video, render_video
 
     cfg = _loop_config(args, seconds=args.seconds)
@@ -187,7 +173,7 @@ def train(args) -> int:
     from ..paper.model import LEDLinkModel
     from ..presets import observer_preset
 
-    _check_out_file(args.out, ".pt")
+    check_out_file(args.out, ".pt")
     system = LEDLinkModel(LinkConstants(distance=args.distance))
     design, config = observer_preset(args.design, system.Te)
     config.n_samples = args.samples
