@@ -26,6 +26,10 @@ class ControlLaw(Protocol):
 
     def __call__(self, xhat: np.ndarray, t: float) -> float: ...
 
+    #: The law points the receiver at the beam, so a lost link is worth a scan to find
+    #: it again (False for excitations, whose input is the experiment).
+    tracks_beam: bool
+
 
 def intensity_maximum(constants: LinkConstants) -> float:
     """phi [rad] at which photodiode 1 receives the most power (the alignment target)."""
@@ -41,6 +45,8 @@ class Excitation:
         cos_amp, sin_amp: amplitudes [rad/s^2]; omega: angular frequency [rad/s].
     """
 
+    tracks_beam = False
+
     cos_amp: float = 0.0
     sin_amp: float = 0.0
     omega: float = 5.0
@@ -55,6 +61,8 @@ class Excitation:
 @dataclass
 class PaperRateDamping:
     """The paper's closed loop: u = -gain * phidot_hat (gain 0.001 [1/s])."""
+
+    tracks_beam = False
 
     gain: float = 0.001
 
@@ -84,6 +92,8 @@ class AlignmentPID:
         u_max: command limit [rad/s^2]; i_max: clamp of the integral [rad/s].
         domain: half-widths of the estimate's clip (phi [rad], phidot [rad/s]).
     """
+
+    tracks_beam = True
 
     phi_ref: float | None = None
     omega: float = 3.0

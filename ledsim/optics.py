@@ -9,6 +9,9 @@ simulation's noise-free series and every observer model's ``h`` go through it.
 
 from __future__ import annotations
 
+import functools
+import math
+
 import numpy as np
 
 from .config import LinkConstants, ReceiverResponse
@@ -93,3 +96,41 @@ def plausible_power_range(c: LinkConstants) -> tuple[np.ndarray, np.ndarray]:
     sigma = c.measurement_noise_std
     return (np.full(2, -IMPOSSIBLE_SIGMAS * sigma),
             np.full(2, 2.0 * peak_power(c) + IMPOSSIBLE_SIGMAS * sigma))
+
+
+_SHAPE_PHI = np.linspace(-1.2, 1.2, 4801)
+
+
+def pair_shape_inverse(powers, c: LinkConstants) -> tuple[float, float, float]:
+    """(phi [rad], gain [W], v) that give the pair of powers ``powers`` = gain x
+    [g(phi), g(phi + dphi)], from the shape log(P1 / P2), which the gain (distance,
+    attenuation, LED angle) does not change. (NaN, NaN, inf) unless both powers are > 0.
+
+    ``v`` [1/W^2]: variance of the relative gain per unit noise variance on each power,
+    ``[(J^T J)^-1]_gg / gain^2`` with J the Jacobian of the pair in (phi, gain). Off the
+    peak the two photodiodes see nearly the same log-slope, so the gain is poorly
+    determined there and v is large.
+
+    The log-ratio is monotonic in phi for the datasheet response (checked in the tests),
+    so the inversion is a table lookup.
+    """
+    p1, p2 = float(powers[0]), float(powers[1])
+    if not (p1 > 0 and p2 > 0):
+        return math.nan, math.nan, math.inf
+    table = _shape_table(c.receiver, c.dphi)
+    phi = float(np.interp(math.log(p1 / p2), table, _SHAPE_PHI))
+    r = c.receiver
+    g1, g2 = float(receiver_response(phi, r)), float(receiver_response(phi + c.dphi, r))
+    gain = (p1 * g1 + p2 * g2) / (g1 * g1 + g2 * g2)
+    d1 = gain * float(receiver_response_derivative(phi, r))
+    d2 = gain * float(receiver_response_derivative(phi + c.dphi, r))
+    det = d1 * g2 - d2 * g1  # J = [[d1, g1], [d2, g2]]
+    if det == 0 or gain <= 0:
+        return phi, gain, math.inf
+    v = (d1 * d1 + d2 * d2) / det**2 / gain**2
+    return phi, gain, v
+
+
+@functools.lru_cache(maxsize=8)
+def _shape_table(r: ReceiverResponse, dphi: float) -> np.ndarray:
+    return np.log(receiver_response(_SHAPE_PHI, r) / receiver_response(_SHAPE_PHI + dphi, r))

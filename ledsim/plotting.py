@@ -116,6 +116,12 @@ def plot_run(trace, title: str, estimator: str, path: Path) -> Path:
         ax.plot(t, trace.xhat[:, i], "C0", lw=1, label=f"{estimator} estimate")
         ax.set_ylabel(label)
         ax.grid(alpha=0.3)
+    lost = getattr(trace, "lost", None)
+    if lost is not None and np.any(lost):
+        for ax in axes:
+            ax.fill_between(t, 0, 1, where=lost, transform=ax.get_xaxis_transform(),
+                            color="C3", alpha=0.12, lw=0,
+                            label="link lost (supervisor)" if ax is axes[0] else None)
     axes[0].legend(fontsize=8)
     _power_axis(axes[2], t, trace.power, trace.power_clean, trace.occluded.any(axis=1),
                 "blocked")

@@ -70,3 +70,19 @@ def test_estimator_wrapper_adds_the_estimate():
     obs, *_ = env.step(np.zeros(1, np.float32))
     assert np.all(np.isfinite(obs))
     assert ledsim.envs.ENV_ID in gym.registry
+
+
+
+def test_estimator_wrapper_adds_a_lost_flag_that_a_kick_raises():
+    env = EstimatorObservation(gym.make(ENV_ID, disturbances=("kick:start=1.5",)),
+                               estimator="ekf", lost_flag=True)
+    obs, _ = env.reset(seed=0)
+    assert obs.shape == (5,) and env.observation_space.contains(obs)
+    flags = []
+    for _ in range(300):  # 3 s, holding still: the kick at 1.5 s throws the link out
+        obs, *_ = env.step(np.zeros(1, np.float32))
+        flags.append(obs[4])
+    flags = np.array(flags)
+    assert set(flags) <= {0.0, 1.0}
+    assert not flags[100:150].any() and flags[150:].any()
+    env.close()

@@ -83,6 +83,10 @@ def _add_loop_args(p) -> None:
     p.add_argument("--disturbance", action="append", default=[], metavar="SPEC",
                    help="name[:key=value,...] with name in " + ", ".join(DISTURBANCES)
                    + " (repeatable)")
+    p.add_argument("--no-supervision", action="store_true",
+                   help="no loss detection, gain tracking or reacquisition scan: the "
+                   "estimator alone drives the motor (and the KKL is the shipped one of "
+                   "--distance)")
     _add_world_args(p)
 
 

@@ -23,7 +23,7 @@ def _loop_config(args, **kw):
 
     cfg = RunConfig(scenario=args.scenario, estimator=args.estimator,
                     disturbances=tuple(args.disturbance), distance=args.distance,
-                    scene=args.scene, **kw)
+                    scene=args.scene, supervision=not args.no_supervision, **kw)
     cfg.validate()
     return cfg
 

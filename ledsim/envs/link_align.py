@@ -33,6 +33,8 @@ import gymnasium as gym
 import numpy as np
 from gymnasium import spaces
 
+from observer.supervision import ResidualMonitor
+
 from ..config import LinkConstants
 from ..optics import peak_power
 from ..physics.disturbances import parse_disturbance
@@ -136,13 +138,17 @@ class LinkAlignEnv(gym.Env):
 
 class EstimatorObservation(gym.ObservationWrapper):
     """Adds an estimator's output to the observation: (P1 [W], P2 [W], phi_hat [rad],
-    phidot_hat [rad/s]). The estimator runs behind the same dropout gate as ``ledsim
-    run``, and is told the applied acceleration each step."""
+    phidot_hat [rad/s]), and with ``lost_flag`` a fifth entry, 1.0 when the residual
+    monitor of ``ledsim run`` (:class:`observer.supervision.ResidualMonitor`) does not
+    trust the estimate, else 0.0. The estimator runs behind the same dropout gate as
+    ``ledsim run``, and is told the applied acceleration each step."""
 
-    def __init__(self, env: LinkAlignEnv, estimator: str = "kkl"):
+    def __init__(self, env: LinkAlignEnv, estimator: str = "kkl", lost_flag: bool = False):
         super().__init__(env)
         self.policy = ShippedAlignmentPolicy(env.unwrapped, estimator)
-        self.observation_space = spaces.Box(-np.inf, np.inf, (4,), np.float64)
+        self.lost_flag = lost_flag
+        self.observation_space = spaces.Box(-np.inf, np.inf, (5 if lost_flag else 4,),
+                                            np.float64)
 
     def reset(self, **kw):
         self.policy.reset()
@@ -153,7 +159,10 @@ class EstimatorObservation(gym.ObservationWrapper):
         return super().step(action)
 
     def observation(self, obs):
-        return np.concatenate([obs, self.policy.estimate(obs)])
+        parts = [obs, self.policy.estimate(obs)]
+        if self.lost_flag:
+            parts.append([float(self.policy.lost)])
+        return np.concatenate(parts)
 
 
 class ShippedAlignmentPolicy:
@@ -176,12 +185,15 @@ class ShippedAlignmentPolicy:
         self.estimator = build_estimator(estimator, system, model=model, checkpoint=ckpt)
         self.law_template = AlignmentPID()
         self.gate = DropoutGate(c)
+        self.monitor = ResidualMonitor(model)
         self.warmup_steps = int(round(1.0 / c.Te))
         self.reset()
 
     def reset(self) -> None:
         self.estimator.reset()
         self.gate.reset()
+        self.monitor = ResidualMonitor(self.monitor.system)
+        self.lost = False
         self.law = self.law_template.start(self.env.system.constants)
         self.k = 0
         self.last_action = 0.0
@@ -192,7 +204,9 @@ class ShippedAlignmentPolicy:
         if self._xhat is not None:  # the previous step's input moves the estimator on
             u = -self.last_action * self.env.torque_limit / self.env.system.inertia
             self.estimator.predict(u)
-        self._xhat = self.estimator.update(self.gate(np.asarray(obs, dtype=float)[:2]))
+        y = self.gate(np.asarray(obs, dtype=float)[:2])
+        self._xhat = self.estimator.update(y)
+        self.lost = self.monitor.update(y, self._xhat)
         return self._xhat
 
     def __call__(self, obs) -> np.ndarray:

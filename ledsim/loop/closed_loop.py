@@ -18,16 +18,20 @@ import numpy as np
 
 from observer import checkpoint as ckpt
 
+from ..control import intensity_maximum
 from ..estimators import build_estimator
+from ..optics import peak_power, receiver_response, transmitter_gain
 from ..physics.disturbances import parse_disturbance
+from ..physics.scene import WorldConfig
 from ..physics.sensor import IrradianceSensor, SensorReading
 from ..physics.simulation import simulate
 from ..physics.system import GimbalSystem, IdentifiedGimbalModel
 from ..resources import require_shipped_checkpoint
 from ..results import DictAccess
-from .config import RunConfig
+from .config import REFERENCE_DISTANCE, RunConfig
 from .gate import DropoutGate
 from .metrics import RunMetrics, run_metrics
+from .supervisor import LinkSupervisor
 
 #: Encoder hold during the warm-up: PD on the gimbal angle, 10 rad/s bandwidth,
 #: gains in units of the hinge inertia (1/s^2, 1/s).
@@ -40,7 +44,9 @@ class Trace(DictAccess):
 
     Attributes:
         t [s]; x, xhat: true and estimated (phi [rad], phidot [rad/s]); power,
-        power_clean (N, 2) [W]; torque [N m]; occluded (N, 2): any aperture ray blocked.
+        power_clean (N, 2) [W]; torque [N m]; occluded (N, 2): any aperture ray blocked;
+        lost (N,): the supervisor did not trust the estimate; acquiring (N,): its
+        acquisition scan had the motor.
     """
 
     t: np.ndarray
@@ -50,6 +56,8 @@ class Trace(DictAccess):
     power_clean: np.ndarray
     torque: np.ndarray
     occluded: np.ndarray
+    lost: np.ndarray | None = None
+    acquiring: np.ndarray | None = None
 
 
 @dataclass
@@ -61,6 +69,13 @@ class RunOutcome(DictAccess):
     us_per_step: float
     realtime_factor: float
     trace: Trace | None = None
+
+
+def achievable_power(res, c) -> np.ndarray:
+    """Most photodiode 1 could receive at each step of ``res`` [W]: the transmitter gain
+    of that moment's distance and LED angle, times the receiver's peak response."""
+    g_max = float(receiver_response(intensity_maximum(c), c.receiver))
+    return transmitter_gain(res.distance[:, 0], res.emission_angle[:, 0], c) * g_max
 
 
 _MODELS: dict = {}
@@ -75,14 +90,26 @@ def identified_model(system: GimbalSystem) -> IdentifiedGimbalModel:
 
 
 def loop_checkpoint(cfg: RunConfig):
-    """The KKL checkpoint of a run: ``cfg.checkpoint`` or the shipped MuJoCo observer."""
-    return cfg.checkpoint or require_shipped_checkpoint(cfg.distance, "mujoco")
+    """The KKL checkpoint of a run: ``cfg.checkpoint``, or the shipped MuJoCo observer
+    (with supervision, the one of :data:`REFERENCE_DISTANCE` for every distance: the
+    supervisor rescales the powers to its gain)."""
+    if cfg.checkpoint:
+        return cfg.checkpoint
+    d = REFERENCE_DISTANCE if cfg.supervision else cfg.distance
+    return require_shipped_checkpoint(d, "mujoco")
+
+
+def observer_world(cfg: RunConfig) -> WorldConfig:
+    """The world the KKL's checkpoint is validated against and its model is fitted in."""
+    if cfg.checkpoint is None and cfg.supervision:
+        return cfg.world_config(distance=REFERENCE_DISTANCE)
+    return cfg.world_config()
 
 
 def check_checkpoint(cfg: RunConfig) -> None:
     """Fail fast (before any worker starts) on a checkpoint that does not fit the world."""
     if cfg.estimator == "kkl":
-        ckpt.load(loop_checkpoint(cfg), GimbalSystem(cfg.world_config()))
+        ckpt.load(loop_checkpoint(cfg), GimbalSystem(observer_world(cfg)))
 
 
 class ClosedLoop:
@@ -118,43 +145,72 @@ class ClosedLoop:
             self.estimator.reset()
         self.on_step = on_step
         self.q_hold = self.world.gimbal_angle
+        self.supervisor = None
+        if self.estimator is not None and cfg.supervision:
+            # Prior of the gain: the configured distance's over the estimator model's.
+            prior = peak_power(constants) / peak_power(self.estimator_system.constants)
+            self.supervisor = LinkSupervisor(self.estimator, constants, self.system.inertia,
+                                             warmup=self.scenario.warmup,
+                                             reacquire=self.law.tracks_beam,
+                                             gain_ratio=prior)
         self.xhats: list[np.ndarray] = []
+        self.flags: list[tuple[bool, bool]] = []  # (lost, acquiring) per step
         self.spent = 0.0  # s in the estimator and the law
 
     def _estimator(self):
         cfg = self.cfg
+        self.estimator_system = self.system
         if cfg.estimator != "kkl":
             return build_estimator(cfg.estimator, self.system, model=self.model,
                                    particles=cfg.particles)
+        world = observer_world(cfg)
+        system = self.system if world == self.system.config else GimbalSystem(world)
+        self.estimator_system = system
         # Omega's f: the identified model; or the simulator in a world of its own, since
         # f() resets MuJoCo's state to evaluate a step; or none.
         if cfg.omega_model == "simulator":
-            omega_f = GimbalSystem(cfg.world_config())
+            omega_f = GimbalSystem(world)
         else:
-            omega_f = self.model if cfg.omega_model == "identified" else self.system
-        return build_estimator("kkl", self.system, model=omega_f,
+            omega_f = identified_model(system) if cfg.omega_model == "identified" else system
+        return build_estimator("kkl", system, model=omega_f,
                                checkpoint=loop_checkpoint(cfg),
                                omega=cfg.omega_model != "none")
 
     def control(self, reading: SensorReading, t: float) -> float:
         """Motor torque [N m] for step t [s] from the sensor reading."""
         t0 = time.perf_counter()
-        est = self.estimator
+        est, w = self.estimator, self.world
+        scan_torque = None
         if est is None:
             xhat = np.array([reading.phi, reading.phidot])
+            self.flags.append((False, False))
         else:
-            xhat = est.update(self.gate(reading.power))
+            y = self.gate(reading.power)
+            if self.supervisor is None:
+                xhat = est.update(y)
+                self.flags.append((False, False))
+            else:
+                d = self.supervisor.step(t, y, w.gimbal_angle, w.gimbal_rate)
+                xhat, scan_torque = d.xhat, d.torque
+                if d.reseeded:
+                    self.law = self.scenario.start_law(self.system.constants)
+                self.flags.append((d.lost, d.acquiring))
         warming_up = t < self.scenario.warmup
-        u = 0.0 if warming_up else self.law(xhat, t)
+        if scan_torque is not None:
+            u = -scan_torque / self.system.inertia
+        else:
+            u = 0.0 if warming_up else self.law(xhat, t)
         if est is not None:
             est.predict(u)
         self.spent += time.perf_counter() - t0
         self.xhats.append(xhat)
         if self.on_step is not None:
-            self.on_step(t, self.world, reading, xhat)
+            self.on_step(t, w, reading, xhat)
+        if scan_torque is not None:
+            return scan_torque
         if warming_up:
             # While the estimator converges, the motor only holds its own encoder angle.
-            w, inertia = self.world, self.system.inertia
+            inertia = self.system.inertia
             return (-HOLD_GAINS[0] * inertia * (w.gimbal_angle - self.q_hold)
                     - HOLD_GAINS[1] * inertia * w.gimbal_rate)
         return float(self.system.torque_for(u))
@@ -166,11 +222,16 @@ class ClosedLoop:
                        progress=progress)
         wall = time.perf_counter() - t0
         xhat = np.array(self.xhats)
-        ends = [d.event_end for d in self.disturbances if d.event_end is not None]
+        events = [d for d in self.disturbances if d.event_end is not None]
+        flags = np.array(self.flags, dtype=bool).reshape(-1, 2)
         metrics = run_metrics(res.x, xhat, res.power_clean, self.scenario.steady_from,
-                              self.system.constants, ends[0] if ends else None)
+                              self.system.constants,
+                              events[0].event_end if events else None,
+                              lost=flags[:, 0] if self.supervisor is not None else None,
+                              event_start=events[0].start if events else None,
+                              power_max=achievable_power(res, self.system.constants))
         trace = Trace(res.t, res.x, xhat, res.power, res.power_clean, res.torque,
-                      res.occluded) if keep_trace else None
+                      res.occluded, flags[:, 0], flags[:, 1]) if keep_trace else None
         return RunOutcome(metrics, 1e6 * self.spent / len(res.t),
                           res.t[-1] / wall if len(res.t) else 0.0, trace)
 

@@ -40,6 +40,8 @@ PHYSICS_SCENARIOS = {
 #: Estimators of the MuJoCo loop (``kkl-paper`` exists for the closed-form model only).
 LOOP_ESTIMATORS = tuple(n for n in ESTIMATORS if n != "kkl-paper")
 OMEGA_MODELS = ("identified", "simulator", "none")
+#: Distance [m] of the shipped MuJoCo KKL that serves every distance under supervision.
+REFERENCE_DISTANCE = 0.085
 
 
 @dataclass
@@ -61,6 +63,8 @@ class RunConfig:
         workers: processes.
         seconds: length of a run [s] (None: the scenario's).
         scene: MJCF scene file (None: the shipped one).
+        supervision: watch the estimate, flag a lost link and reacquire it with a scan
+            (:mod:`ledsim.loop.supervisor`); off: the estimator alone drives the motor.
     """
 
     scenario: str = "align"
@@ -76,6 +80,7 @@ class RunConfig:
     workers: int = 2
     seconds: float | None = None
     scene: str | None = None
+    supervision: bool = True
 
     def validate(self) -> None:
         for flag, value, registry in (("scenario", self.scenario, PHYSICS_SCENARIOS),
@@ -104,7 +109,9 @@ class RunConfig:
     def run_seconds(self) -> float:
         return self.scenario_spec.seconds if self.seconds is None else self.seconds
 
-    def world_config(self) -> WorldConfig:
+    def world_config(self, distance: float | None = None) -> WorldConfig:
+        """The MuJoCo world of the run (at ``distance`` [m] instead, when given)."""
         extra = {} if self.scene is None else {"xml": self.scene}
-        return WorldConfig(constants=LinkConstants(distance=self.distance),
+        d = self.distance if distance is None else distance
+        return WorldConfig(constants=LinkConstants(distance=d),
                            torque_limit=self.torque_limit, **extra)

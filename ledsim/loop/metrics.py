@@ -3,7 +3,7 @@
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 
 import numpy as np
 
@@ -26,10 +26,18 @@ class RunMetrics(DictAccess):
         rmse, rmse_steady: RMSE of (x1 [rad], x2 [rad/s]) over the run and from the
             scenario's steady-state start, keyed ``x1``, ``x2``.
         alignment_time: first time |phi - phi_ref| < 1 deg for 0.5 s [s] (None: never).
-        availability: share of the run with P1 >= 90% of its maximum [-].
+        availability: share of the run with P1 >= 90% of the most it could receive at
+            that moment's geometry (distance and LED angle; a perfectly pointed
+            photodiode 1) [-].
         mean_power: mean noise-free P1 [W].
         recovery_time: after a transient event (an occlusion) ends, time until aligned
             again [s]; None without such an event or without recovery.
+        lost_share: share of the run the supervisor flagged the link lost [-].
+        link_events: each loss of the link as ``[t_lost, t_recovered]`` [s]
+            (``t_recovered`` None when the run ended lost).
+        detection_delay: from the start of a transient event to the first loss flagged
+            that is still on at its start or begins after it [s] (0 when flagged
+            before the start; None: no event, or no loss flagged).
     """
 
     rmse: dict
@@ -38,6 +46,18 @@ class RunMetrics(DictAccess):
     availability: float
     mean_power: float
     recovery_time: float | None
+    lost_share: float = 0.0
+    link_events: list = field(default_factory=list)
+    detection_delay: float | None = None
+
+
+def link_events(lost: np.ndarray, Te: float) -> list[list]:
+    """Intervals where ``lost`` holds, as ``[t_lost, t_recovered or None]`` [s]."""
+    flags = np.concatenate([[False], np.asarray(lost, dtype=bool), [False]])
+    edges = np.flatnonzero(np.diff(flags.astype(int)))
+    n = len(lost)
+    return [[float(a * Te), None if b >= n else float(b * Te)]
+            for a, b in zip(edges[::2], edges[1::2], strict=True)]
 
 
 def first_settled(flags: np.ndarray, Te: float, hold: float = 0.5) -> float | None:
@@ -52,7 +72,10 @@ def first_settled(flags: np.ndarray, Te: float, hold: float = 0.5) -> float | No
 
 
 def run_metrics(x: np.ndarray, xhat: np.ndarray, power_clean: np.ndarray, steady_from: float,
-                constants: LinkConstants, event_end: float | None = None) -> RunMetrics:
+                constants: LinkConstants, event_end: float | None = None,
+                lost: np.ndarray | None = None,
+                event_start: float | None = None,
+                power_max: np.ndarray | None = None) -> RunMetrics:
     """Metrics of one run from its true state, estimate and noise-free powers.
 
     Args:
@@ -61,6 +84,10 @@ def run_metrics(x: np.ndarray, xhat: np.ndarray, power_clean: np.ndarray, steady
         steady_from: start of the steady-state window [s].
         constants: the link (for the alignment target and the peak power).
         event_end: end of a transient event [s] for the recovery time.
+        lost: the supervisor's lost flag per step (None: not supervised).
+        event_start: start of a transient event [s] for the detection delay.
+        power_max: most P1 could receive at each step [W] (None: the peak at the
+            configured distance, constant).
     """
     Te = constants.Te
     e = rmse(xhat, x)
@@ -70,10 +97,20 @@ def run_metrics(x: np.ndarray, xhat: np.ndarray, power_clean: np.ndarray, steady
     recovery = None
     if event_end is not None:
         recovery = first_settled(aligned[int(round(event_end / Te)):], Te)
+    events = [] if lost is None else link_events(lost, Te)
+    delay = None
+    if event_start is not None:
+        # The first loss still on at the event or after it (0 if flagged before it: an
+        # occluder's edge dims the beam before its nominal start).
+        after = [a for a, b in events if b is None or b > event_start + 1e-9]
+        delay = max(after[0] - event_start, 0.0) if after else None
     return RunMetrics(
         rmse={"x1": float(e[0]), "x2": float(e[1])},
         rmse_steady={"x1": float(es[0]), "x2": float(es[1])},
         alignment_time=first_settled(aligned, Te),
-        availability=float(np.mean(p1 >= AVAILABILITY_LEVEL * peak_power(constants))),
+        availability=float(np.mean(p1 >= AVAILABILITY_LEVEL * (
+            peak_power(constants) if power_max is None else power_max))),
         mean_power=float(np.mean(p1)),
-        recovery_time=recovery)
+        recovery_time=recovery,
+        lost_share=0.0 if lost is None else float(np.mean(lost)),
+        link_events=events, detection_delay=delay)

@@ -38,7 +38,10 @@ class Stat(DictAccess):
 
 @dataclass
 class RunSummary(DictAccess):
-    """What ``ledsim run`` writes to ``results.json`` (units as in :class:`RunMetrics`)."""
+    """What ``ledsim run`` writes to ``results.json`` (units as in :class:`RunMetrics`).
+
+    ``link_events`` lists, per seed, each loss of the link as ``[t_lost, t_recovered]``
+    [s]; ``recovery_time.n`` counts the seeds that were aligned again after the event."""
 
     scenario: str
     estimator: str
@@ -57,6 +60,10 @@ class RunSummary(DictAccess):
     availability: Stat
     mean_power: Stat
     recovery_time: Stat
+    lost_share: Stat
+    detection_delay: Stat
+    link_events: list
+    supervision: bool
     us_per_step: Stat
     realtime_factor: Stat
 
@@ -77,6 +84,11 @@ def summarize(cfg: RunConfig, outs: list[RunOutcome]) -> RunSummary:
         availability=stat(lambda o: o.metrics.availability),
         mean_power=stat(lambda o: o.metrics.mean_power),
         recovery_time=stat(lambda o: o.metrics.recovery_time),
+        lost_share=stat(lambda o: o.metrics.lost_share),
+        detection_delay=stat(lambda o: o.metrics.detection_delay),
+        link_events=[{"seed": k, "lost_recovered": o.metrics.link_events}
+                     for k, o in enumerate(outs)],
+        supervision=cfg.supervision,
         us_per_step=stat(lambda o: o.us_per_step),
         realtime_factor=stat(lambda o: o.realtime_factor))
 

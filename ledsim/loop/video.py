@@ -37,16 +37,23 @@ def render_video(cfg: RunConfig, seed: int, out: Path, spec: VideoSpec,
              f"{', '.join(cfg.disturbances) or 'no disturbance'}")
     writer = VideoWriter(out, spec.fps)
     recorder: list[FrameRecorder] = []
+    loops: list[ClosedLoop] = []
 
     def on_step(t, world, reading, xhat):
         if not recorder:
             recorder.append(FrameRecorder(world, spec.width, spec.height, spec.fps,
                                           spec.camera, writer, label=label))
-        recorder[0](t, world, reading, xhat)
+        loop = loops[0]
+        status = ""
+        if loop.supervisor is not None:
+            lost, acquiring = loop.flags[-1]
+            status = "scanning" if acquiring else "lost" if lost else "ok"
+        recorder[0](t, world, reading, xhat, status=status)
 
     ok = False
     try:
-        ClosedLoop(cfg, seed, on_step).run(progress=progress)
+        loops.append(ClosedLoop(cfg, seed, on_step))
+        loops[0].run(progress=progress)
         if still is not None and recorder and recorder[0].last_frame is not None:
             from PIL import Image
 

@@ -134,22 +134,29 @@ class WaterCurrent(Disturbance):
 
 @dataclass
 class TransmitterMotion(Disturbance):
-    """The LED platform sways sideways and yaws sinusoidally.
+    """The LED platform sways sideways, yaws sinusoidally and drifts along the link.
 
     Attributes:
         sway: lateral (y) amplitude [m].
         frequency: motion frequency [Hz].
         yaw: yaw amplitude of the LED axis [rad] (changes theta).
+        drift: speed away from the receiver along the link [m/s] (changes d; negative
+            comes closer), until ``drift_until``.
+        drift_until: time the drift stops [s].
     """
 
     sway: float = 0.005
     frequency: float = 0.5
     yaw: float = 0.0
+    drift: float = 0.0
+    drift_until: float = 3600.0
 
     def apply(self, world: LinkWorld, t: float) -> None:
         w = 2 * math.pi * self.frequency
-        pos = world.transmitter_home + np.array([0.0, self.sway * math.sin(w * t), 0.0])
-        vel = np.array([0.0, self.sway * w * math.cos(w * t), 0.0])
+        along = self.drift * min(t, self.drift_until)
+        pos = world.transmitter_home + np.array([along, self.sway * math.sin(w * t), 0.0])
+        vel = np.array([self.drift if t < self.drift_until else 0.0,
+                        self.sway * w * math.cos(w * t), 0.0])
         world.set_transmitter(pos, vel, yaw=self.yaw * math.sin(w * t) if self.yaw else None)
 
 
@@ -200,6 +207,8 @@ RANGES = {
     "start": (0.0, 3600.0, "s", False),
     "rate": (-50.0, 50.0, "rad/s", False),
     "duration": (0.0, 3600.0, "s", True),
+    "drift": (-0.05, 0.05, "m/s", False),
+    "drift_until": (0.0, 3600.0, "s", False),
 }
 
 @dataclass

@@ -118,11 +118,13 @@ class Overlay:
         self.n = max(2, int(seconds_shown * fps))
         self.phi, self.phihat, self.p1, self.p2 = (deque(maxlen=self.n) for _ in range(4))
         self.label = label
-        size = max(10, height // 40)
+        size = self.font_px = max(10, height // 40)
         try:
             self.font = ImageFont.load_default(size=size)
         except TypeError:  # Pillow < 10.1 has only the fixed bitmap font
             self.font = ImageFont.load_default()
+
+    status = ""
 
     def push(self, phi: float, phihat: float, p1: float, p2: float) -> None:
         for q, v in ((self.phi, phi), (self.phihat, phihat), (self.p1, p1), (self.p2, p2)):
@@ -148,6 +150,11 @@ class Overlay:
         d.text((half + 8, y0 + 4), f"power [W] {lim_p[0]:.2f}..{lim_p[1]:.2f}: P1 (blue) "
                "P2 (orange)", fill=(230, 230, 230), font=self.font)
         d.text((8, 6), f"t = {t:5.2f} s   {self.label}", fill=(255, 255, 255), font=self.font)
+        if self.status in STATUS_BADGES:
+            text, colour = STATUS_BADGES[self.status]
+            x0 = self.w - 8 - d.textlength(text, font=self.font) - 12
+            d.rectangle((x0, 4, self.w - 8, 10 + self.font_px + 6), fill=colour)
+            d.text((x0 + 6, 8), text, fill=(0, 0, 0), font=self.font)
         return np.asarray(img)
 
     def _trace(self, d, box, values, limits, colour) -> None:
@@ -159,6 +166,12 @@ class Overlay:
         xs = x1 - (len(v) - 1 - np.arange(len(v))) * (x1 - x0) / (self.n - 1)
         ys = y1 - v * (y1 - y0)
         d.line(list(zip(xs.tolist(), ys.tolist(), strict=True)), fill=colour, width=2)
+
+
+#: Overlay badge of the link supervisor's state: text and colour.
+STATUS_BADGES = {"ok": ("LINK OK", (90, 220, 120)),
+                 "lost": ("LINK LOST", (255, 170, 60)),
+                 "scanning": ("LINK LOST - scanning", (255, 90, 90))}
 
 
 class VideoWriter:
@@ -208,8 +221,12 @@ class FrameRecorder:
         self.peak = peak_power(world.config.constants)
         self.last_frame: np.ndarray | None = None
 
-    def __call__(self, t: float, world: LinkWorld, reading: SensorReading, xhat) -> None:
+    def __call__(self, t: float, world: LinkWorld, reading: SensorReading, xhat,
+                 status: str = "") -> None:
+        """Record step ``t`` [s]; ``status``: the link supervisor's "ok", "lost" or
+        "scanning" ("" when the run is not supervised)."""
         self.overlay.push(reading.phi, float(xhat[0]), reading.power[0], reading.power[1])
+        self.overlay.status = status
         if t + 1e-9 < self.next_t:
             return
         self.next_t += 1.0 / self.fps

@@ -1,0 +1,114 @@
+"""Link supervision: the same layer over every estimator (KKL, EKF, UKF, PF).
+
+Each control step the supervisor rescales the powers to the estimator's model gain
+(:class:`~observer.supervision.GainTracker`: distance and LED angle scale both
+photodiodes alike), runs the estimator, and checks its estimate against the
+measurements (:class:`~observer.supervision.ResidualMonitor`). While the link is trusted
+it remembers the gimbal's encoder angle. Once it is lost (after the warm-up) it takes
+the motor and runs an :class:`~ledsim.loop.acquisition.AcquisitionScan` around the last
+trusted angle, until the scan sees the beam well enough to re-seed the estimator and
+the gain; then the control law has the motor again.
+"""
+
+from __future__ import annotations
+
+from collections import deque
+from dataclasses import dataclass
+
+import numpy as np
+
+from observer.estimator import Estimator
+from observer.supervision import GainTracker, ResidualMonitor
+
+from ..config import LinkConstants
+from ..optics import pair_power, pair_shape_inverse
+from .acquisition import AcquisitionScan
+
+
+def model_gain(model, constants: LinkConstants) -> float:
+    """Transmitter gain [W] of a model whose ``h`` is gain x [g(phi), g(phi + dphi)]
+    (least squares over its domain)."""
+    phi = np.linspace(model.domain_low[0], model.domain_high[0], 101)
+    h = np.asarray(model.h(np.stack([phi, np.zeros_like(phi)], axis=-1)))
+    g = pair_power(1.0, phi, constants)
+    return float(np.sum(h * g) / np.sum(g * g))
+
+
+@dataclass
+class Decision:
+    """What the supervisor decided at one step.
+
+    Attributes:
+        xhat: the estimate (phi [rad], phidot [rad/s]).
+        lost: the estimate is not trusted (inconsistent with the data, or scanning).
+        acquiring: the acquisition scan has the motor.
+        torque: the scan's motor torque [N m] (None: the control law decides).
+        reseeded: the estimator was restarted from the scan this step.
+        reason: why the link is lost ("" when it is not).
+    """
+
+    xhat: np.ndarray
+    lost: bool
+    acquiring: bool = False
+    torque: float | None = None
+    reseeded: bool = False
+    reason: str = ""
+
+
+class LinkSupervisor:
+    """Gain normalisation, loss detection, acquisition scan and re-seeding for one run.
+
+    Args:
+        estimator: the estimator it supervises (its ``system`` is the model).
+        constants: the link.
+        inertia: gimbal inertia about the hinge [kg m^2].
+        warmup: no scan before this time [s] (the estimator is still converging).
+        reacquire: scan for the beam when lost (False: only flag the loss).
+        gain_ratio: initial link gain over the model's [-].
+    """
+
+    def __init__(self, estimator: Estimator, constants: LinkConstants, inertia: float,
+                 warmup: float = 0.0, reacquire: bool = True, gain_ratio: float = 1.0):
+        self.estimator = estimator
+        model = estimator.system
+        self.monitor = ResidualMonitor(model)
+        self.gain = GainTracker(model, lambda y: pair_shape_inverse(y, constants),
+                                model_gain(model, constants), ratio=gain_ratio)
+        self.scan = AcquisitionScan(constants, inertia)
+        self.warmup = warmup
+        self.reacquire = reacquire
+        # Encoder angles of the last trusted steps: a loss is flagged up to about 0.2 s
+        # late, so the scan centres on the oldest, from before the trouble began.
+        self.trusted_q: deque = deque(maxlen=max(1, int(round(0.3 / constants.Te))))
+
+    def step(self, t: float, y: np.ndarray, q: float, qdot: float) -> Decision:
+        """Step ``t`` [s]: gated powers ``y`` [W], encoder angle ``q`` [rad] and rate
+        ``qdot`` [rad/s]. The estimator has taken the measurement when this returns."""
+        est, scan = self.estimator, self.scan
+        y_model = self.gain.normalize(y)
+        xhat = est.update(y_model)
+        lost = self.monitor.update(y_model, xhat)
+        scan.record(y, q)
+        if not (lost or scan.active):
+            self.trusted_q.append(q)
+            self.gain.update(y, self.monitor.noise_std * self.gain.ratio)
+            return Decision(xhat, False)
+        if t < self.warmup or not self.reacquire:
+            return Decision(xhat, True, reason=self.monitor.reason)
+        # Lost: re-seed from the last samples if they show the beam (no need to move),
+        # else scan until they do.
+        noise = float(np.mean(self.monitor.noise_std)) * self.gain.ratio
+        fit = scan.fit(noise)
+        if fit is not None:
+            scan.stop()
+            self.gain.set(fit.gain / self.gain.model_gain)
+            # phi = phi_home - q while the hull holds still, so phidot = -qdot.
+            est.reset(np.array([fit.phi, -qdot]))
+            xhat = est.update(self.gain.normalize(y))
+            self.monitor.reset()
+            self.trusted_q.clear()
+            self.trusted_q.append(q)
+            return Decision(xhat, True, reseeded=True, reason="re-seeded")
+        if not scan.active:
+            scan.start(self.trusted_q[0] if self.trusted_q else q, q)
+        return Decision(xhat, True, True, scan.torque(q, qdot, noise), reason="acquiring")
