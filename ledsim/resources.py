@@ -24,7 +24,7 @@ def checkpoint_dir() -> Path:
 
 
 def shipped_checkpoint(distance: float, world: str = "closed-form",
-                       design: str = "default") -> Path:
+                       design: str = "default", noise: float = 1.0) -> Path:
     """Path of the shipped observer for a link distance [m].
 
     Args:
@@ -32,19 +32,23 @@ def shipped_checkpoint(distance: float, world: str = "closed-form",
         world: ``"closed-form"`` (trained on the paper's model) or ``"mujoco"``
             (trained on transitions of the MuJoCo world).
         design: ``"default"`` or ``"paper"`` (closed-form only).
+        noise: measurement noise it was trained for, over the nominal [-] (MuJoCo
+            observers of the bank that serves weak links).
     """
     prefix = {"closed-form": {"default": "kkl", "paper": "kkl_paper"},
               "mujoco": {"default": "kkl_mujoco"}}[world][design]
-    return checkpoint_dir() / f"{prefix}_d{distance:g}.pt"
+    suffix = "" if noise == 1.0 else f"_noise{noise:g}"
+    return checkpoint_dir() / f"{prefix}_d{distance:g}{suffix}.pt"
 
 
 def require_shipped_checkpoint(distance: float, world: str = "closed-form",
-                               design: str = "default") -> Path:
+                               design: str = "default", noise: float = 1.0) -> Path:
     """:func:`shipped_checkpoint`, or a :class:`LedsimError` that says how to train one."""
-    path = shipped_checkpoint(distance, world, design)
+    path = shipped_checkpoint(distance, world, design, noise)
     if not path.is_file():
         how = (f"`ledsim train --distance {distance:g} --out PATH`" if world == "closed-form"
-               else f"`python scripts/train_mujoco.py --distances {distance:g}`")
+               else f"`python scripts/train_mujoco.py --distances {distance:g} "
+               f"--noise-scales {noise:g}`")
         kind = "checkpoint" if world == "closed-form" else "MuJoCo observer"
         raise LedsimError(f"no shipped {kind} for distance {distance:g} m: train one with "
                           f"{how} and pass --checkpoint PATH")

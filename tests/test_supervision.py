@@ -164,6 +164,16 @@ def test_one_kkl_serves_a_distance_without_a_checkpoint_of_its_own():
     assert out.metrics.availability > 0.75
 
 
+def test_the_bank_holds_a_far_link_with_its_noisier_member():
+    # One nominal observer kept 0.73 of the power at d = 0.2 m (docs/supervision.md).
+    from ledsim.loop.closed_loop import ClosedLoop
+
+    loop = ClosedLoop(RunConfig(estimator="kkl", distance=0.2), 0)
+    out = loop.run()
+    assert out.metrics.availability > 0.8
+    assert loop.estimator.noise_ratios[loop.estimator.active] == 6.0
+
+
 def test_cli_run_writes_loss_and_recovery_times(tmp_path):
     r = run_cli("run", "--disturbance", "kick:start=2.5", "--seconds", "6", "--seeds", "1",
                 "--workers", "1", "--no-plot", "-q", "--out", str(tmp_path / "o"))

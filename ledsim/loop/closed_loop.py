@@ -9,26 +9,26 @@ estimator.
 
 from __future__ import annotations
 
-import json
 import time
 from collections.abc import Callable
 from dataclasses import dataclass
 
 import numpy as np
 
-from observer import checkpoint as ckpt
-
 from ..control import intensity_maximum
-from ..estimators import build_estimator
 from ..optics import peak_power, receiver_response, transmitter_gain
 from ..physics.disturbances import parse_disturbance
-from ..physics.scene import WorldConfig
 from ..physics.sensor import IrradianceSensor, SensorReading
 from ..physics.simulation import simulate
-from ..physics.system import GimbalSystem, IdentifiedGimbalModel
-from ..resources import require_shipped_checkpoint
+from ..physics.system import GimbalSystem
 from ..results import DictAccess
-from .config import REFERENCE_DISTANCE, RunConfig
+from .config import RunConfig
+from .estimation import (  # noqa: F401 (re-exported)
+    check_checkpoint,
+    identified_model,
+    loop_checkpoint,
+    loop_estimator,
+)
 from .gate import DropoutGate
 from .metrics import RunMetrics, run_metrics
 from .supervisor import LinkSupervisor
@@ -78,40 +78,6 @@ def achievable_power(res, c) -> np.ndarray:
     return transmitter_gain(res.distance[:, 0], res.emission_angle[:, 0], c) * g_max
 
 
-_MODELS: dict = {}
-
-
-def identified_model(system: GimbalSystem) -> IdentifiedGimbalModel:
-    """The fitted one-step model of this world (cached per process and world)."""
-    key = json.dumps(system.metadata(), sort_keys=True)
-    if key not in _MODELS:
-        _MODELS[key] = IdentifiedGimbalModel.fit(system)
-    return _MODELS[key]
-
-
-def loop_checkpoint(cfg: RunConfig):
-    """The KKL checkpoint of a run: ``cfg.checkpoint``, or the shipped MuJoCo observer
-    (with supervision, the one of :data:`REFERENCE_DISTANCE` for every distance: the
-    supervisor rescales the powers to its gain)."""
-    if cfg.checkpoint:
-        return cfg.checkpoint
-    d = REFERENCE_DISTANCE if cfg.supervision else cfg.distance
-    return require_shipped_checkpoint(d, "mujoco")
-
-
-def observer_world(cfg: RunConfig) -> WorldConfig:
-    """The world the KKL's checkpoint is validated against and its model is fitted in."""
-    if cfg.checkpoint is None and cfg.supervision:
-        return cfg.world_config(distance=REFERENCE_DISTANCE)
-    return cfg.world_config()
-
-
-def check_checkpoint(cfg: RunConfig) -> None:
-    """Fail fast (before any worker starts) on a checkpoint that does not fit the world."""
-    if cfg.estimator == "kkl":
-        ckpt.load(loop_checkpoint(cfg), GimbalSystem(observer_world(cfg)))
-
-
 class ClosedLoop:
     """One closed-loop run of ``cfg`` with seed ``seed``.
 
@@ -128,7 +94,7 @@ class ClosedLoop:
         self.scenario = cfg.scenario_spec
         self.system = GimbalSystem(cfg.world_config())
         self.model = identified_model(self.system)
-        self.estimator = self._estimator()
+        self.estimator, self.estimator_system = loop_estimator(cfg, self.system, self.model)
         if self.estimator is not None:
             self.estimator.seed_run(seed)
         constants = self.system.constants
@@ -147,34 +113,17 @@ class ClosedLoop:
         self.q_hold = self.world.gimbal_angle
         self.supervisor = None
         if self.estimator is not None and cfg.supervision:
-            # Prior of the gain: the configured distance's over the estimator model's.
+            # Prior of the gain: the configured distance's over the estimator model's; and
+            # of the noise in the model's gain, for a bank of observers.
             prior = peak_power(constants) / peak_power(self.estimator_system.constants)
+            noise = cfg.noise_scale / prior
             self.supervisor = LinkSupervisor(self.estimator, constants, self.system.inertia,
                                              warmup=self.scenario.warmup,
                                              reacquire=self.law.tracks_beam,
-                                             gain_ratio=prior)
+                                             gain_ratio=prior, noise_ratio=noise)
         self.xhats: list[np.ndarray] = []
         self.flags: list[tuple[bool, bool]] = []  # (lost, acquiring) per step
         self.spent = 0.0  # s in the estimator and the law
-
-    def _estimator(self):
-        cfg = self.cfg
-        self.estimator_system = self.system
-        if cfg.estimator != "kkl":
-            return build_estimator(cfg.estimator, self.system, model=self.model,
-                                   particles=cfg.particles)
-        world = observer_world(cfg)
-        system = self.system if world == self.system.config else GimbalSystem(world)
-        self.estimator_system = system
-        # Omega's f: the identified model; or the simulator in a world of its own, since
-        # f() resets MuJoCo's state to evaluate a step; or none.
-        if cfg.omega_model == "simulator":
-            omega_f = GimbalSystem(world)
-        else:
-            omega_f = identified_model(system) if cfg.omega_model == "identified" else system
-        return build_estimator("kkl", system, model=omega_f,
-                               checkpoint=loop_checkpoint(cfg),
-                               omega=cfg.omega_model != "none")
 
     def control(self, reading: SensorReading, t: float) -> float:
         """Motor torque [N m] for step t [s] from the sensor reading."""

@@ -40,8 +40,6 @@ PHYSICS_SCENARIOS = {
 #: Estimators of the MuJoCo loop (``kkl-paper`` exists for the closed-form model only).
 LOOP_ESTIMATORS = tuple(n for n in ESTIMATORS if n != "kkl-paper")
 OMEGA_MODELS = ("identified", "simulator", "none")
-#: Distance [m] of the shipped MuJoCo KKL that serves every distance under supervision.
-REFERENCE_DISTANCE = 0.085
 
 
 @dataclass

@@ -17,6 +17,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from observer.bank import ObserverBank
 from observer.estimator import Estimator
 from observer.supervision import GainTracker, ResidualMonitor
 
@@ -65,13 +66,20 @@ class LinkSupervisor:
         warmup: no scan before this time [s] (the estimator is still converging).
         reacquire: scan for the beam when lost (False: only flag the loss).
         gain_ratio: initial link gain over the model's [-].
+        noise_ratio: initial measurement noise in the model's gain over the model's
+            nominal noise [-] (it is then learned; a bank of observers starts with the
+            member nearest it).
     """
 
     def __init__(self, estimator: Estimator, constants: LinkConstants, inertia: float,
-                 warmup: float = 0.0, reacquire: bool = True, gain_ratio: float = 1.0):
+                 warmup: float = 0.0, reacquire: bool = True, gain_ratio: float = 1.0,
+                 noise_ratio: float = 1.0):
         self.estimator = estimator
         model = estimator.system
         self.monitor = ResidualMonitor(model)
+        self.monitor.noise_var = self.monitor.noise_var * noise_ratio**2
+        if isinstance(estimator, ObserverBank):
+            estimator.active = estimator.nearest(noise_ratio)
         self.gain = GainTracker(model, lambda y: pair_shape_inverse(y, constants),
                                 model_gain(model, constants), ratio=gain_ratio)
         self.scan = AcquisitionScan(constants, inertia)
@@ -80,6 +88,11 @@ class LinkSupervisor:
         # Encoder angles of the last trusted steps: a loss is flagged up to about 0.2 s
         # late, so the scan centres on the oldest, from before the trouble began.
         self.trusted_q: deque = deque(maxlen=max(1, int(round(0.3 / constants.Te))))
+
+    def noise_ratio(self) -> float:
+        """Measurement noise in the model's gain over the model's nominal noise [-]."""
+        nominal = np.mean(self.estimator.system.measurement_noise_std)
+        return float(np.mean(self.monitor.noise_std) / nominal)
 
     def step(self, t: float, y: np.ndarray, q: float, qdot: float) -> Decision:
         """Step ``t`` [s]: gated powers ``y`` [W], encoder angle ``q`` [rad] and rate
@@ -92,6 +105,10 @@ class LinkSupervisor:
         if not (lost or scan.active):
             self.trusted_q.append(q)
             self.gain.update(y, self.monitor.noise_std * self.gain.ratio)
+            if isinstance(est, ObserverBank):
+                # The member trained for the noise the rescaled powers now carry.
+                if est.select(self.noise_ratio(), self.gain.normalize(y)):
+                    xhat = est.xhat
             return Decision(xhat, False)
         if t < self.warmup or not self.reacquire:
             return Decision(xhat, True, reason=self.monitor.reason)

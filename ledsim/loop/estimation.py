@@ -1,0 +1,112 @@
+"""Which estimator a closed-loop run uses, and the models it computes with.
+
+The Bayesian filters (EKF, UKF, particle filter) use the identified one-step model of
+the run's own world. The KKL, without ``--checkpoint`` and under supervision, is the
+shipped bank of observers of :data:`REFERENCE_DISTANCE` trained for the noise levels
+:data:`BANK_NOISE` (:class:`observer.bank.ObserverBank`): the supervisor rescales the
+powers to the reference gain, and the bank runs the member trained for the noise those
+rescaled powers carry. One configuration thus serves every distance.
+"""
+
+from __future__ import annotations
+
+import json
+from dataclasses import dataclass, replace
+from pathlib import Path
+
+from observer import checkpoint as ckpt
+from observer.bank import ObserverBank
+
+from ..estimators import build_estimator
+from ..physics.scene import WorldConfig
+from ..physics.system import GimbalSystem, IdentifiedGimbalModel
+from ..resources import require_shipped_checkpoint
+from .config import RunConfig
+
+#: Distance [m] of the shipped MuJoCo KKL bank that serves every distance.
+REFERENCE_DISTANCE = 0.085
+#: The bank's members: measurement noise over the nominal [-] and observer preset.
+#: Rescaled to the reference gain, the nominal noise is about 6x at d = 0.2 m and 13x at
+#: 0.3 m; the slower filters of the low-light preset pay off only on the weakest link.
+BANK = ((1.0, "default"), (3.0, "default"), (6.0, "default"), (13.0, "low-light"))
+BANK_NOISE = tuple(s for s, _ in BANK)
+
+
+def bank_preset(noise: float) -> str:
+    """Observer preset of the bank member for ``noise`` (``"default"`` off the bank)."""
+    return dict(BANK).get(noise, "default")
+
+_MODELS: dict = {}
+
+
+def identified_model(system: GimbalSystem) -> IdentifiedGimbalModel:
+    """The fitted one-step model of this world (cached per process and world)."""
+    key = json.dumps(system.metadata(), sort_keys=True)
+    if key not in _MODELS:
+        _MODELS[key] = IdentifiedGimbalModel.fit(system)
+    return _MODELS[key]
+
+
+@dataclass(frozen=True)
+class KKLMember:
+    """One KKL of a run: its noise level over the nominal [-], its checkpoint, and the
+    world it was trained in (which its metadata is checked against)."""
+
+    noise: float
+    checkpoint: Path
+    world: WorldConfig
+
+
+def noisier(world: WorldConfig, scale: float) -> WorldConfig:
+    """``world`` with the measurement-noise standard deviation times ``scale``."""
+    c = world.constants
+    return replace(world, constants=replace(
+        c, measurement_noise_var=c.measurement_noise_var * scale * scale))
+
+
+def kkl_members(cfg: RunConfig) -> list[KKLMember]:
+    """The KKL observers of a run: ``cfg.checkpoint``, the shipped observer of the
+    distance (without supervision), or the shipped bank (with it)."""
+    if cfg.checkpoint:
+        return [KKLMember(1.0, Path(cfg.checkpoint), cfg.world_config())]
+    if not cfg.supervision:
+        return [KKLMember(1.0, require_shipped_checkpoint(cfg.distance, "mujoco"),
+                          cfg.world_config())]
+    ref = cfg.world_config(distance=REFERENCE_DISTANCE)
+    return [KKLMember(s, require_shipped_checkpoint(REFERENCE_DISTANCE, "mujoco", noise=s),
+                      noisier(ref, s)) for s in BANK_NOISE]
+
+
+def loop_checkpoint(cfg: RunConfig) -> Path:
+    """The (first) KKL checkpoint of a run."""
+    return kkl_members(cfg)[0].checkpoint
+
+
+def check_checkpoint(cfg: RunConfig) -> None:
+    """Fail fast (before any worker starts) on a checkpoint that does not fit."""
+    if cfg.estimator == "kkl":
+        for m in kkl_members(cfg):
+            ckpt.load(m.checkpoint, GimbalSystem(m.world))
+
+
+def loop_estimator(cfg: RunConfig, system: GimbalSystem, model: IdentifiedGimbalModel):
+    """(estimator, the system whose gain its model has) for a run in ``system``'s world;
+    the estimator is None for the oracle."""
+    if cfg.estimator != "kkl":
+        return build_estimator(cfg.estimator, system, model=model,
+                               particles=cfg.particles), system
+    members = kkl_members(cfg)
+    first = members[0].world
+    ref = system if first == system.config else GimbalSystem(first)
+    # Omega's f: the identified model; or the simulator in a world of its own, since
+    # f() resets MuJoCo's state to evaluate a step; or none.
+    if cfg.omega_model == "simulator":
+        omega_f = GimbalSystem(first)
+    else:
+        omega_f = identified_model(ref) if cfg.omega_model == "identified" else ref
+    observers = [build_estimator("kkl", ref if m.world == first else GimbalSystem(m.world),
+                                 model=omega_f, checkpoint=m.checkpoint,
+                                 omega=cfg.omega_model != "none") for m in members]
+    if len(observers) == 1:
+        return observers[0], ref
+    return ObserverBank(observers, [m.noise for m in members]), ref

@@ -1,0 +1,95 @@
+"""A bank of observers designed for different noise levels, one active at a time.
+
+A KKL observer's filter bank and decoder are tuned to the measurement noise it was
+trained with: its decoder is trained on the z noise it will see, and a longer memory
+pays off only when the light is weak. :class:`ObserverBank` holds members trained for
+several noise levels and runs the one whose design noise is nearest (in ratio) the
+noise measured in the model's units. A switch re-seeds the new member from the current
+estimate, so the estimate carries on.
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+
+from .errors import ObserverError
+from .estimator import Estimator
+
+
+class ObserverBank(Estimator):
+    """Members for several noise levels; ``select(noise_ratio)`` picks one.
+
+    Args:
+        members: estimators sharing one model (``system``) except for its noise level.
+        noise_ratios: each member's design noise over the model's nominal noise [-],
+            increasing.
+        hysteresis: relative margin past the midpoint (in log) before a switch [-].
+    """
+
+    name = "kkl"
+
+    def __init__(self, members: list[Estimator], noise_ratios, hysteresis: float = 0.15):
+        ratios = [float(r) for r in noise_ratios]
+        if not members or len(members) != len(ratios) or ratios != sorted(ratios) or \
+                min(ratios) <= 0:
+            raise ObserverError(f"noise_ratios={noise_ratios!r}: one positive, increasing "
+                                f"value per member ({len(members)})")
+        super().__init__(members[0].system)
+        self.members = members
+        self.noise_ratios = ratios
+        self.hysteresis = hysteresis
+        self.active = 0
+        #: The latest estimate (None before the first update).
+        self.xhat: np.ndarray | None = None
+
+    @property
+    def current(self) -> Estimator:
+        return self.members[self.active]
+
+    def nearest(self, noise_ratio: float) -> int:
+        """Index of the member whose design noise is nearest ``noise_ratio`` (in log)."""
+        logs = [math.log(r) for r in self.noise_ratios]
+        x = math.log(max(noise_ratio, 1e-12))
+        return min(range(len(logs)), key=lambda i: abs(logs[i] - x))
+
+    def select(self, noise_ratio: float, y: np.ndarray | None = None) -> bool:
+        """Switch to the member for ``noise_ratio`` once it is clearly nearer (beyond the
+        hysteresis); the new member starts from the current estimate and takes ``y``.
+        Returns whether it switched."""
+        i = self.nearest(noise_ratio)
+        if i == self.active:
+            return False
+        a, b = sorted((self.active, i))
+        mid = 0.5 * (math.log(self.noise_ratios[a]) + math.log(self.noise_ratios[b]))
+        x = math.log(max(noise_ratio, 1e-12))
+        if abs(x - mid) < self.hysteresis * abs(math.log(self.noise_ratios[b] /
+                                                         self.noise_ratios[a])):
+            return False
+        xhat = self.xhat
+        self.active = i
+        if xhat is not None:
+            self.current.reset(xhat)
+            if y is not None:
+                self.xhat = self.current.update(y)
+        return True
+
+    # -- Estimator interface ---------------------------------------------------------
+
+    def seed_run(self, seed: int) -> None:
+        for m in self.members:
+            m.seed_run(seed)
+
+    def reset(self, x0=None) -> None:
+        """Every member from ``x0``; the active one stays."""
+        for m in self.members:
+            m.reset(x0)
+        self.xhat = None
+
+    def update(self, y) -> np.ndarray:
+        self.xhat = self.current.update(y)
+        return self.xhat
+
+    def predict(self, u) -> None:
+        self.current.predict(u)
