@@ -19,21 +19,26 @@ def recorder():
     rec.close()
 
 
-def frame_at(rec, occluded: bool):
+def frame_at(rec, occluded: bool, beams: bool = True):
     world = rec.world
     world.set_occluder(world.link_midpoint() if occluded else world.occluder_home)
     world.forward_kinematics()
     reading = IrradianceSensor(world).read()
     rec.overlay.push(reading.phi, reading.phi, *reading.power)
+    if not beams:  # the same scene without the beam capsules
+        rec.renderer.update_scene(world.data, camera=rec.camera, scene_option=rec.option)
+        return rec.renderer.render()
     return rec.render(0.0, reading)
 
 
-def beam_pixels(frame):
-    r, g, b = (frame[..., i].astype(int) for i in range(3))
-    scene = frame[: int(0.7 * frame.shape[0])]  # above the overlay panel
+def beam_pixels(frame, bare):
+    """(red, cyan) pixels the beams add to the scene ``bare`` (above the overlay)."""
+    rows = int(0.7 * frame.shape[0])
+    scene = frame[:rows]
     r, g, b = (scene[..., i].astype(int) for i in range(3))
-    red = np.count_nonzero((r > 180) & (g < 120) & (b < 120))
-    cyan = np.count_nonzero((g > 180) & (b > 170) & (r < 170))
+    new = np.abs(scene.astype(int) - bare[:rows].astype(int)).sum(axis=-1) > 60
+    red = np.count_nonzero(new & (r > 180) & (g < 120) & (b < 120))
+    cyan = np.count_nonzero(new & (g > 180) & (b > 170) & (r < 170))
     return red, cyan
 
 
@@ -48,8 +53,10 @@ def test_frames_render_headless_and_are_not_blank(recorder):
 
 def test_beam_turns_red_and_short_when_blocked(recorder):
     recorder.world.reset(0.0)
-    red_clear, cyan_clear = beam_pixels(frame_at(recorder, occluded=False))
-    red_blocked, cyan_blocked = beam_pixels(frame_at(recorder, occluded=True))
+    red_clear, cyan_clear = beam_pixels(frame_at(recorder, occluded=False),
+                                        frame_at(recorder, occluded=False, beams=False))
+    red_blocked, cyan_blocked = beam_pixels(frame_at(recorder, occluded=True),
+                                            frame_at(recorder, occluded=True, beams=False))
     assert cyan_clear > 20 and red_clear == 0
     assert red_blocked > 5 and cyan_blocked < cyan_clear / 2
     recorder.world.reset(0.0)

@@ -216,3 +216,41 @@ def test_unstable_physics_is_an_error_and_leaves_no_log_file(tmp_path, monkeypat
     with pytest.raises(WorldError, match="unstable"):
         w.step()
     assert not (tmp_path / "MUJOCO_LOG.TXT").exists()
+
+
+def _without_trim(tmp_path):
+    """The scene with every eye-only (class "trim") geom deleted, through MjSpec."""
+    import mujoco
+
+    spec = mujoco.MjSpec.from_file(str(SCENE))
+    trims = [g for g in spec.geoms if g.classname.name == "trim"]
+    assert len(trims) >= 10  # yoke, hubs, head face, pointer, thruster, ...
+    for g in trims:
+        spec.delete(g)
+    path = tmp_path / "bare.xml"
+    path.write_text(spec.to_xml())
+    return WorldConfig(xml=path)
+
+
+def test_eye_only_geoms_change_neither_inertia_nor_light_nor_motion(tmp_path):
+    dressed, bare = LinkWorld(), LinkWorld(_without_trim(tmp_path))
+    for name in ("auv", "gimbal"):
+        a, b = dressed.model.body(name), bare.model.body(name)
+        np.testing.assert_allclose(a.mass, b.mass, rtol=1e-12)
+        np.testing.assert_allclose(a.inertia, b.inertia, rtol=1e-12)
+        np.testing.assert_allclose(a.ipos, b.ipos, atol=1e-12)
+    for q in np.linspace(-1.2, 1.2, 13):
+        powers = []
+        for w in (dressed, bare):
+            w.reset(gimbal_angle=q)
+            powers.append(IrradianceSensor(w, noise=False).read(noise=False).power)
+        np.testing.assert_allclose(powers[0], powers[1], rtol=1e-12)
+    # Same torque, same motion through the water (fluid forces included).
+    traj = []
+    for w in (dressed, bare):
+        w.reset(gimbal_angle=0.2, gimbal_rate=1.0)
+        for _ in range(200):
+            w.set_torque(0.01)
+            w.step()
+        traj.append((w.gimbal_angle, w.hull_yaw))
+    np.testing.assert_allclose(traj[0], traj[1], rtol=0, atol=1e-12)

@@ -47,7 +47,8 @@ def render_video(cfg: RunConfig, seed: int, out: Path, spec: VideoSpec,
         status = ""
         if loop.supervisor is not None:
             lost, acquiring = loop.flags[-1]
-            status = "scanning" if acquiring else "lost" if lost else "ok"
+            status = ("scanning" if acquiring else "lost" if lost
+                      else "dropout" if loop.gate.held.any() else "ok")
         recorder[0](t, world, reading, xhat, status=status)
 
     ok = False

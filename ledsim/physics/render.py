@@ -62,6 +62,16 @@ def make_renderer(world: LinkWorld, width: int, height: int) -> mujoco.Renderer:
     return renderer
 
 
+def scene_option() -> mujoco.MjvOption:
+    """What a frame shows: every geom group up to the optics (group 3: lenses, LED
+    housing; the light rays ignore it, the eye does not), and no sites (the lenses
+    mark the photodiodes)."""
+    opt = mujoco.MjvOption()
+    opt.geomgroup[:4] = 1
+    opt.sitegroup[:] = 0
+    return opt
+
+
 def add_beams(scene: mujoco.MjvScene, world: LinkWorld, reading: SensorReading,
               blocked_at: list[np.ndarray | None], peak_power: float) -> None:
     """Append one capsule per photodiode from the LED towards it (or to the blocker)."""
@@ -170,6 +180,7 @@ class Overlay:
 
 #: Overlay badge of the link supervisor's state: text and colour.
 STATUS_BADGES = {"ok": ("LINK OK", (90, 220, 120)),
+                 "dropout": ("BEAM BLOCKED - holding", (240, 210, 70)),
                  "lost": ("LINK LOST", (255, 170, 60)),
                  "scanning": ("LINK LOST - scanning", (255, 90, 90))}
 
@@ -220,11 +231,13 @@ class FrameRecorder:
         self.overlay = Overlay(width, height, fps=fps, label=label)
         self.peak = peak_power(world.config.constants)
         self.last_frame: np.ndarray | None = None
+        self.option = scene_option()
 
     def __call__(self, t: float, world: LinkWorld, reading: SensorReading, xhat,
                  status: str = "") -> None:
         """Record step ``t`` [s]; ``status``: the link supervisor's "ok", "lost" or
-        "scanning" ("" when the run is not supervised)."""
+        "scanning", or "dropout" while the gate holds a blocked photodiode ("" when the
+        run is not supervised)."""
         self.overlay.push(reading.phi, float(xhat[0]), reading.power[0], reading.power[1])
         self.overlay.status = status
         if t + 1e-9 < self.next_t:
@@ -237,7 +250,7 @@ class FrameRecorder:
 
     def render(self, t: float, reading: SensorReading) -> np.ndarray:
         r = self.renderer
-        r.update_scene(self.world.data, camera=self.camera)
+        r.update_scene(self.world.data, camera=self.camera, scene_option=self.option)
         add_beams(r.scene, self.world, reading, blocking_points(self.world),
                   self.peak)
         frame = r.render()

@@ -85,11 +85,12 @@ class LinkWorld:
         self.initial_hull_pos = self.data.xpos[self._auv].copy()
 
     def _set_hull_buoyancy(self) -> None:
-        """Buoyancy = displaced water weight: gravcomp = rho V / m for the hull body."""
+        """Buoyancy = displaced water weight: gravcomp = rho V / m for the hull body. V
+        counts the geoms the water acts on (fluid forces on), not eye-only trim."""
         m = self.model
         rho = self.config.water_density
         volume = 0.0
-        for g in np.flatnonzero(m.geom_bodyid == self._auv):
+        for g in np.flatnonzero((m.geom_bodyid == self._auv) & (m.geom_fluid[:, 0] > 0)):
             size = m.geom_size[g]
             if m.geom_type[g] == mujoco.mjtGeom.mjGEOM_ELLIPSOID:
                 volume += 4.0 / 3.0 * math.pi * float(np.prod(size))
