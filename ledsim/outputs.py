@@ -9,6 +9,8 @@ from collections.abc import Iterator
 from contextlib import contextmanager
 from pathlib import Path
 
+from observer.atomic import check_interrupt
+
 from .errors import LedsimError
 
 
@@ -54,6 +56,7 @@ def output_folder(out: str | Path) -> Iterator[Path]:
     tmp = Path(tempfile.mkdtemp(dir=out.parent, prefix=f".{out.name}.", suffix=".partial"))
     try:
         yield tmp
+        check_interrupt()
     except BaseException:
         shutil.rmtree(tmp, ignore_errors=True)
         raise

@@ -4,7 +4,19 @@ from __future__ import annotations
 
 import os
 import tempfile
+import threading
 from pathlib import Path
+
+#: Set by a command-line SIGINT handler. Python ignores a KeyboardInterrupt raised inside
+#: some callbacks (an import lock's weakref callback, for one), so the work may carry on:
+#: no output is then committed (:func:`check_interrupt` before every final rename).
+INTERRUPTED = threading.Event()
+
+
+def check_interrupt() -> None:
+    """Raise KeyboardInterrupt if an interrupt was requested, even a swallowed one."""
+    if INTERRUPTED.is_set():
+        raise KeyboardInterrupt
 
 
 def atomic_write_bytes(path: Path, write) -> None:
@@ -18,6 +30,7 @@ def atomic_write_bytes(path: Path, write) -> None:
     try:
         write(tmp)
         os.chmod(tmp, 0o666 & ~umask)  # mkstemp makes 0600; give the usual file mode
+        check_interrupt()
         os.replace(tmp, path)
     except BaseException:
         if os.path.exists(tmp):

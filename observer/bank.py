@@ -26,11 +26,14 @@ class ObserverBank(Estimator):
         noise_ratios: each member's design noise over the model's nominal noise [-],
             increasing.
         hysteresis: relative margin past the midpoint (in log) before a switch [-].
+        dwell: calls of :meth:`select` in a row that must ask for the same other member
+            before it runs (a passing disturbance of the gain does not switch).
     """
 
     name = "kkl"
 
-    def __init__(self, members: list[Estimator], noise_ratios, hysteresis: float = 0.15):
+    def __init__(self, members: list[Estimator], noise_ratios, hysteresis: float = 0.15,
+                 dwell: int = 0):
         ratios = [float(r) for r in noise_ratios]
         if not members or len(members) != len(ratios) or ratios != sorted(ratios) or \
                 min(ratios) <= 0:
@@ -40,6 +43,8 @@ class ObserverBank(Estimator):
         self.members = members
         self.noise_ratios = ratios
         self.hysteresis = hysteresis
+        self.dwell = int(dwell)
+        self._asked = (None, 0)  # (member asked for, calls in a row)
         self.active = 0
         #: The latest estimate (None before the first update).
         self.xhat: np.ndarray | None = None
@@ -59,14 +64,21 @@ class ObserverBank(Estimator):
         hysteresis); the new member starts from the current estimate and takes ``y``.
         Returns whether it switched."""
         i = self.nearest(noise_ratio)
+        if i != self.active:
+            a, b = sorted((self.active, i))
+            mid = 0.5 * (math.log(self.noise_ratios[a]) + math.log(self.noise_ratios[b]))
+            x = math.log(max(noise_ratio, 1e-12))
+            if abs(x - mid) < self.hysteresis * abs(math.log(self.noise_ratios[b] /
+                                                             self.noise_ratios[a])):
+                i = self.active
         if i == self.active:
+            self._asked = (None, 0)
             return False
-        a, b = sorted((self.active, i))
-        mid = 0.5 * (math.log(self.noise_ratios[a]) + math.log(self.noise_ratios[b]))
-        x = math.log(max(noise_ratio, 1e-12))
-        if abs(x - mid) < self.hysteresis * abs(math.log(self.noise_ratios[b] /
-                                                         self.noise_ratios[a])):
+        n = self._asked[1] + 1 if self._asked[0] == i else 1
+        self._asked = (i, n)
+        if n <= self.dwell:
             return False
+        self._asked = (None, 0)
         xhat = self.xhat
         self.active = i
         if xhat is not None:

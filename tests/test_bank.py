@@ -66,3 +66,13 @@ def test_bad_ratios_are_refused():
         ObserverBank([Recorder(s), Recorder(s)], [6.0, 1.0])
     with pytest.raises(ObserverError, match="one positive"):
         ObserverBank([Recorder(s)], [1.0, 2.0])
+
+
+def test_a_switch_waits_for_the_dwell():
+    s = LEDLinkModel(LinkConstants())
+    bank = ObserverBank([Recorder(s), Recorder(s)], [1.0, 6.0], dwell=3)
+    bank.update(np.zeros(2))
+    assert [bank.select(6.0) for _ in range(3)] == [False] * 3
+    assert bank.select(1.0) is False  # asked for the active one: the count starts again
+    assert [bank.select(6.0) for _ in range(4)] == [False, False, False, True]
+    assert bank.active == 1

@@ -48,3 +48,21 @@ def test_two_renders_to_one_file_never_share_a_temporary(tmp_path):
         assert p.returncode == 0, err
     assert iio.imread(out).shape[0] in (10, 15)  # one whole video, not a mix
     assert [p.name for p in tmp_path.iterdir()] == ["clip.mp4"]
+
+
+def test_a_swallowed_interrupt_still_commits_nothing(tmp_path):
+    # Python ignores a KeyboardInterrupt raised in some callbacks (an import lock's), so
+    # the work can finish after a Ctrl-C: the flag the handler sets stops the commit.
+    from ledsim.outputs import output_folder
+    from observer.atomic import INTERRUPTED, atomic_write_text
+
+    INTERRUPTED.set()
+    try:
+        with pytest.raises(KeyboardInterrupt):
+            with output_folder(tmp_path / "out") as tmp:
+                (tmp / "table.md").write_text("x")
+        with pytest.raises(KeyboardInterrupt):
+            atomic_write_text(tmp_path / "a.json", "{}")
+    finally:
+        INTERRUPTED.clear()
+    assert list(tmp_path.iterdir()) == []

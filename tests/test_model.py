@@ -76,3 +76,12 @@ def test_bad_constants_are_rejected_by_name(field, value):
 def test_constants_round_trip_through_dict():
     c = LinkConstants(distance=0.2)
     assert LinkConstants.from_dict(c.to_dict()) == c
+
+
+def test_table2_rows_at_d0_are_the_papers_table2_not_table1():
+    from ledsim.paper.evaluate import paper_reference
+
+    t2 = paper_reference("if2", 0.085, table=2)
+    assert (t2["x1"], t2["x2"], t2["y1"], t2["y2"]) == (6.64e-3, 40.1e-3, 13.0e-3, 15.6e-3)
+    assert paper_reference("if2", 0.085, table=1)["x1"] == 5.7e-3
+    assert paper_reference("open-loop", 0.2, table=2) is None

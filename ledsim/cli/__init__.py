@@ -10,7 +10,10 @@ import argparse
 import logging
 import math
 import os
+import signal
 import sys
+
+from observer.atomic import INTERRUPTED
 
 EXIT_USAGE = 2
 CAMERAS = ("side", "overview", "chase")  # the shipped scene's cameras
@@ -213,6 +216,11 @@ def _gl_from_argv(argv: list[str]) -> None:
             os.environ.setdefault("MUJOCO_GL", value)
 
 
+def _on_sigint(signum, frame) -> None:
+    INTERRUPTED.set()
+    raise KeyboardInterrupt
+
+
 def main(argv: list[str] | None = None) -> int:
     argv = sys.argv[1:] if argv is None else list(argv)
     _gl_from_argv(argv)
@@ -222,14 +230,19 @@ def main(argv: list[str] | None = None) -> int:
     from . import commands
 
     args = build_parser().parse_args(argv)
+    signal.signal(signal.SIGINT, _on_sigint)
     # Results go to stdout; progress bars (tqdm) and diagnostics (logging) to stderr.
     logging.basicConfig(format="ledsim: %(message)s",
                         level=logging.WARNING if args.quiet else logging.INFO)
     try:
-        return getattr(commands, args.command)(args)
+        code = getattr(commands, args.command)(args)
     except (LedsimError, ObserverError) as exc:
-        print(f"ledsim: error: {exc}", file=sys.stderr)
-        return EXIT_USAGE
+        if not INTERRUPTED.is_set():
+            print(f"ledsim: error: {exc}", file=sys.stderr)
+            return EXIT_USAGE
     except KeyboardInterrupt:
+        INTERRUPTED.set()
+    if INTERRUPTED.is_set():  # also a Ctrl-C that Python swallowed: nothing was committed
         print("ledsim: interrupted", file=sys.stderr)
         return 130
+    return code

@@ -109,4 +109,6 @@ def loop_estimator(cfg: RunConfig, system: GimbalSystem, model: IdentifiedGimbal
                                  omega=cfg.omega_model != "none") for m in members]
     if len(observers) == 1:
         return observers[0], ref
-    return ObserverBank(observers, [m.noise for m in members]), ref
+    # A switch waits 2 s: a vibrating hull moves the gain for a moment, not for good.
+    return ObserverBank(observers, [m.noise for m in members],
+                        dwell=int(round(2.0 / system.Te))), ref

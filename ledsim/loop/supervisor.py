@@ -66,9 +66,10 @@ class LinkSupervisor:
         warmup: no scan before this time [s] (the estimator is still converging).
         reacquire: scan for the beam when lost (False: only flag the loss).
         gain_ratio: initial link gain over the model's [-].
-        noise_ratio: initial measurement noise in the model's gain over the model's
-            nominal noise [-] (it is then learned; a bank of observers starts with the
-            member nearest it).
+        noise_ratio: measurement noise in the model's gain over the model's nominal noise
+            at the initial gain [-]. The sensor's own noise is known (the Bayesian filters
+            are told it too); in the model's gain it scales as 1 / gain, so a bank of
+            observers follows the tracked gain.
     """
 
     def __init__(self, estimator: Estimator, constants: LinkConstants, inertia: float,
@@ -78,6 +79,7 @@ class LinkSupervisor:
         model = estimator.system
         self.monitor = ResidualMonitor(model)
         self.monitor.noise_var = self.monitor.noise_var * noise_ratio**2
+        self.sensor_noise = noise_ratio * gain_ratio  # in the model's nominal noise
         if isinstance(estimator, ObserverBank):
             estimator.active = estimator.nearest(noise_ratio)
         self.gain = GainTracker(model, lambda y: pair_shape_inverse(y, constants),
@@ -90,9 +92,10 @@ class LinkSupervisor:
         self.trusted_q: deque = deque(maxlen=max(1, int(round(0.3 / constants.Te))))
 
     def noise_ratio(self) -> float:
-        """Measurement noise in the model's gain over the model's nominal noise [-]."""
-        nominal = np.mean(self.estimator.system.measurement_noise_std)
-        return float(np.mean(self.monitor.noise_std) / nominal)
+        """Measurement noise in the model's gain over the model's nominal noise [-]: the
+        sensor's noise over the tracked gain. (Not the monitor's learned noise: fast
+        motion, such as a vibrating hull, inflates that and would pick a slow member.)"""
+        return float(self.sensor_noise / self.gain.ratio)
 
     def step(self, t: float, y: np.ndarray, q: float, qdot: float) -> Decision:
         """Step ``t`` [s]: gated powers ``y`` [W], encoder angle ``q`` [rad] and rate

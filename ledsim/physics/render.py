@@ -21,6 +21,8 @@ import mujoco
 import numpy as np
 from PIL import Image, ImageDraw, ImageFont
 
+from observer.atomic import INTERRUPTED
+
 from ..errors import LedsimError
 from ..optics import peak_power
 from .sensor import SensorReading
@@ -208,6 +210,8 @@ class VideoWriter:
 
     def close(self, keep: bool = True) -> None:
         self.writer.close()
+        if keep and INTERRUPTED.is_set():  # a swallowed Ctrl-C: keep nothing
+            keep = False
         if keep:
             os.replace(self.tmp, self.path)
         elif self.tmp.exists():
