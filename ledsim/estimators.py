@@ -5,6 +5,7 @@ name        estimator
 ==========  ====================================================================
 kkl         the learned KKL observer from a checkpoint (validated against the system)
 kkl-paper   the same class, trained with the paper's literal recipe (closed form)
+kkl-handover  the default KKL handing over to a slow-filter KKL after 3 s (closed form)
 ekf         extended Kalman filter
 ukf         unscented Kalman filter
 pf          bootstrap particle filter
@@ -19,6 +20,7 @@ from pathlib import Path
 from observer import checkpoint as ckpt
 from observer.baselines import ExtendedKalmanFilter, ParticleFilter, UnscentedKalmanFilter
 from observer.estimator import Estimator
+from observer.handover import HandoverKKL
 from observer.system import DiscreteSystem
 
 from .errors import LedsimError
@@ -26,6 +28,7 @@ from .errors import LedsimError
 ESTIMATORS = {
     "kkl": "learned KKL observer (shipped checkpoint or --checkpoint)",
     "kkl-paper": "KKL trained with the paper's literal recipe",
+    "kkl-handover": "default KKL handing over to a slow-filter KKL after 3 s",
     "ekf": "extended Kalman filter",
     "ukf": "unscented Kalman filter",
     "pf": "bootstrap particle filter",
@@ -33,9 +36,15 @@ ESTIMATORS = {
 }
 
 
+#: When ``kkl-handover`` hands over [s]: the default bank's slowest time constant (0.5 s)
+#: six times over.
+HANDOVER_S = 3.0
+
+
 def build_estimator(name: str, system: DiscreteSystem, *, model: DiscreteSystem | None = None,
                     checkpoint: str | Path | None = None, particles: int = 2000,
-                    omega: bool = True) -> Estimator | None:
+                    omega: bool = True,
+                    slow_checkpoint: str | Path | None = None) -> Estimator | None:
     """The estimator called ``name``; None for the oracle.
 
     Args:
@@ -48,6 +57,8 @@ def build_estimator(name: str, system: DiscreteSystem, *, model: DiscreteSystem 
         particles: particle-filter size (its random numbers follow the run's seed:
             ``Estimator.seed_run``).
         omega: apply the KKL's Omega correction.
+        slow_checkpoint: the slow half of ``kkl-handover`` (``checkpoint`` is its fast
+            half).
     """
     model = system if model is None else model
     if name in ("kkl", "kkl-paper"):
@@ -58,6 +69,12 @@ def build_estimator(name: str, system: DiscreteSystem, *, model: DiscreteSystem 
         obs.system = model
         obs.omega = omega
         return obs
+    if name == "kkl-handover":
+        if checkpoint is None or slow_checkpoint is None:
+            raise LedsimError("estimator 'kkl-handover' needs a fast and a slow checkpoint")
+        fast, slow = (build_estimator("kkl", system, model=model, checkpoint=c, omega=omega)
+                      for c in (checkpoint, slow_checkpoint))
+        return HandoverKKL(fast, slow, handover_steps=int(round(HANDOVER_S / system.Te)))
     if name == "ekf":
         return ExtendedKalmanFilter(model)
     if name == "ukf":

@@ -91,9 +91,9 @@ def main() -> None:
              "occlusion ends (or the kick) until aligned again; RTF: real-time factor of "
              "the whole loop. Runs are 10 s unless the case needs longer (occlusions of "
              "2 and 5 s, kick: 12-15 s). Every estimator runs under the same link "
-             "supervision (`ledsim/loop/supervisor.py`); the KKL is the one shipped "
-             "observer of d = 0.085 m at every distance, the filters use the model of the "
-             "configured distance.", "", TABLE_HEADER]
+             "supervision (`ledsim/loop/supervisor.py`); the KKL is the one shipped bank "
+             "of d = 0.085 m observers for 1x-13x noise (`docs/supervision.md`) at every "
+             "distance, the filters use the model of the configured distance.", "", TABLE_HEADER]
     results = []
     runs = [(label, kw, LOOP_ESTIMATORS, True) for label, kw in CASES]
     runs += [(label, kw, ("kkl", "ekf"), False) for label, kw in UNSUPERVISED]

@@ -48,18 +48,23 @@ def main() -> None:
         result = evaluate(cfg)
         write_outputs(result, ROOT / "out" / args.table / f"{scenario}_d{d:g}")
         est = result.estimators
-        ratio = [est["kkl"].rmse_steady[k] / est["pf"].rmse_steady[k] for k in KEYS[:2]]
+        ratios = {n: [est[n].rmse_steady[k] / est["pf"].rmse_steady[k] for k in KEYS[:2]]
+                  for n in ("kkl", "kkl-handover") if n in est}
+        ratio = ratios["kkl"]
         for name, e in est.items():
             conv = e.converged_fraction
             cells = " | ".join(f"{e.rmse_steady[k]:.2e}" for k in KEYS)
-            extra = f" | {ratio[0]:.2f} | {ratio[1]:.2f}" if name == "kkl" else " | |"
+            r = ratios.get(name)
+            extra = f" | {r[0]:.2f} | {r[1]:.2f}" if r else " | |"
             lines.append(f"| {scenario} | {d:g} | {name} | {cells} | {e.rmse['x1']:.2e} | "
                          f"{'-' if conv is None else f'{100 * conv:.0f}%'}{extra} |")
         p = paper_reference(scenario, d, table=int(args.table[-1]))
         if p:
             lines.append(f"| {scenario} | {d:g} | paper ({p['source']}) | " +
                          " | ".join(f"{p[k]:.2e}" for k in KEYS) + " | | | | |")
-        print(json.dumps({"scenario": scenario, "d": d, "kkl/pf": ratio}))
+        print(json.dumps({"scenario": scenario, "d": d, "kkl/pf": ratio,
+                          **({"kkl-handover/pf": ratios["kkl-handover"]}
+                             if "kkl-handover" in ratios else {})}))
     atomic_write_text(ROOT / "docs" / f"{args.table}.md", "\n".join(lines) + "\n")
     print("\n".join(lines))
 

@@ -24,9 +24,16 @@ def test_every_disturbance_has_a_short_spec():
 
 
 def paper_run(system, name, seed):
-    ckpt = default_checkpoint(0.085, "paper" if name == "kkl-paper" else "default")
+    d = 0.085
+    if name == "kkl-handover":  # its slow half is shipped for d = 0.1 and 0.2 m
+        from ledsim.config import LinkConstants
+        from ledsim.paper.model import LEDLinkModel
+
+        d = 0.1
+        system = LEDLinkModel(LinkConstants(distance=d))
+    ckpt = default_checkpoint(d, "paper" if name == "kkl-paper" else "default")
     est = build_estimator(name, system, checkpoint=ckpt if name.startswith("kkl") else None,
-                          particles=300)
+                          particles=300, slow_checkpoint=default_checkpoint(d, "slow"))
     est.seed_run(seed)
     sc = get_scenario("if1")
     return run(system, sc, est, Noise.draw(system, sc.n_steps(system.Te), seed))

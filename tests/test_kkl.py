@@ -121,3 +121,26 @@ def test_missing_measurements_never_enter_z(tiny_observer, system, bad):
     # ... and the batched path agrees.
     batch = tiny_observer.run_batch(ys[:, None, :])
     np.testing.assert_allclose(batch[:, 0], out.xhat, atol=1e-10)
+
+
+def test_handover_seeds_the_slow_bank_from_the_fast_estimate():
+    from ledsim.config import LinkConstants
+    from ledsim.estimators import build_estimator
+    from ledsim.paper.evaluate import default_checkpoint
+    from ledsim.paper.model import LEDLinkModel
+
+    system = LEDLinkModel(LinkConstants(distance=0.2))
+    est = build_estimator("kkl-handover", system, checkpoint=default_checkpoint(0.2),
+                          slow_checkpoint=default_checkpoint(0.2, "slow"))
+    k = est.handover_steps
+    assert k == 300
+    sc = get_scenario("if1")
+    out = run(system, sc, est, Noise.draw(system, sc.n_steps(system.Te), 0), [0.3, 0.0])
+    err = np.abs(out.xhat[:, 0] - out.x[:, 0])
+    assert err[k - 20:k].max() < 0.05  # the fast bank has converged by the handover
+    assert err[k:k + 20].max() < 0.05  # and the slow one starts where it was: no jump
+    np.testing.assert_allclose(out.xhat[-1], est.slow.decode(est.slow.z), atol=0.05)
+    # The slow bank, started from the guess on its own, is still far off at the handover.
+    alone = run(system, sc, est.slow, Noise.draw(system, sc.n_steps(system.Te), 0),
+                [0.3, 0.0])
+    assert np.abs(alone.xhat[k - 20:k, 0] - alone.x[k - 20:k, 0]).max() > 0.05

@@ -37,8 +37,9 @@ PHYSICS_SCENARIOS = {
                  description="start 0.2 rad off; u = -0.001 phidot_hat"),
     )
 }
-#: Estimators of the MuJoCo loop (``kkl-paper`` exists for the closed-form model only).
-LOOP_ESTIMATORS = tuple(n for n in ESTIMATORS if n != "kkl-paper")
+#: Estimators of the MuJoCo loop (``kkl-paper`` and ``kkl-handover`` exist for the
+#: closed-form model only).
+LOOP_ESTIMATORS = tuple(n for n in ESTIMATORS if n not in ("kkl-paper", "kkl-handover"))
 OMEGA_MODELS = ("identified", "simulator", "none")
 
 

@@ -47,7 +47,7 @@ class EvaluationConfig:
     particles: int = 5000
     checkpoint: str | None = None
     workers: int = 2
-    estimators: tuple[str, ...] = ("kkl", "kkl-paper", "ekf", "ukf", "pf")
+    estimators: tuple[str, ...] = ("kkl", "kkl-paper", "kkl-handover", "ekf", "ukf", "pf")
 
     def validate(self) -> None:
         get_scenario(self.scenario)
@@ -92,9 +92,11 @@ class EvaluationResult(DictAccess):
 
 
 def _estimator_names(cfg: EvaluationConfig, distance: float) -> list[str]:
-    """``kkl-paper`` only when its checkpoint is shipped and no custom KKL is given."""
-    return [n for n in cfg.estimators if n != "kkl-paper" or (
-        cfg.checkpoint is None and default_checkpoint(distance, "paper").is_file())]
+    """``kkl-paper`` and ``kkl-handover`` only when their checkpoints are shipped and no
+    custom KKL is given."""
+    extra = {"kkl-paper": "paper", "kkl-handover": "slow"}
+    return [n for n in cfg.estimators if n not in extra or (
+        cfg.checkpoint is None and default_checkpoint(distance, extra[n]).is_file())]
 
 
 def _checkpoint(name: str, cfg: EvaluationConfig, distance: float):
@@ -102,6 +104,8 @@ def _checkpoint(name: str, cfg: EvaluationConfig, distance: float):
         return cfg.checkpoint or require_shipped_checkpoint(distance)
     if name == "kkl-paper":
         return default_checkpoint(distance, "paper")
+    if name == "kkl-handover":
+        return require_shipped_checkpoint(distance)
     return None
 
 
@@ -141,7 +145,9 @@ def evaluate(cfg: EvaluationConfig, constants: LinkConstants | None = None,
     scenario = get_scenario(cfg.scenario)
     names = _estimator_names(cfg, cfg.distance)
     ests = {n: build_estimator(n, system, checkpoint=_checkpoint(n, cfg, cfg.distance),
-                               particles=cfg.particles) for n in names}
+                               particles=cfg.particles,
+                               slow_checkpoint=default_checkpoint(cfg.distance, "slow"))
+            for n in names}
     starts = system.sample_domain(np.random.default_rng(STARTS_SEED), cfg.starts)
     jobs = []  # per estimator: its seeds, then its random starts
     for est in ests.values():
