@@ -63,9 +63,7 @@ def load(path: str | Path, system: DiscreteSystem, check: bool = True) -> KKLObs
     try:
         payload = torch.load(path, map_location="cpu", weights_only=True)
         meta = json.loads(payload["metadata_json"])
-        enc, dec = (NumpyMLP(*(payload[f"{prefix}.{k}"].double().numpy()
-                               for k in ("W1", "b1", "W2", "b2")))
-                    for prefix in ("encoder_T", "decoder_T_star"))
+        enc, dec = (_net(payload, prefix) for prefix in ("encoder_T", "decoder_T_star"))
         lam = np.asarray(meta["eigenvalues"], dtype=float)
         B = np.asarray(meta["B_scaled"], dtype=float)
         u_bar = float(meta.get("u_bar", 0.0))
@@ -88,9 +86,22 @@ def load(path: str | Path, system: DiscreteSystem, check: bool = True) -> KKLObs
     return obs
 
 
+def _net(payload: dict, prefix: str) -> NumpyMLP:
+    """A network from its named tensors (``Wm<i>``, ``bm<i>``: layers past the first)."""
+    def arr(k):
+        return payload[f"{prefix}.{k}"].double().numpy()
+
+    n_mid = sum(1 for k in payload if k.startswith(f"{prefix}.Wm"))
+    if n_mid > 16:
+        raise ValueError("too many layers")
+    return NumpyMLP(*(arr(k) for k in ("W1", "b1", "W2", "b2")),
+                    tuple((arr(f"Wm{i}"), arr(f"bm{i}")) for i in range(n_mid)))
+
+
 def _consistent(net: NumpyMLP) -> bool:
     H = net.W1.shape[0] if net.W1.ndim == 2 else -1
-    return (net.W1.ndim == 2 and net.b1.shape == (H,) and net.W2.ndim == 2
+    mids_ok = all(W.shape == (H, H) and b.shape == (H,) for W, b in net.mid)
+    return (net.W1.ndim == 2 and net.b1.shape == (H,) and net.W2.ndim == 2 and mids_ok
             and net.W2.shape[1] == H and net.b2.shape == (net.W2.shape[0],))
 
 

@@ -69,15 +69,33 @@ def usable_mask(system: DiscreteSystem, y: np.ndarray) -> np.ndarray:
 
 class GaussianFilter(Estimator):
     """Shared state of the Kalman-type filters: mean ``x``, covariance ``P``, and the
-    noise covariances Q, R taken from the system."""
+    noise covariances Q, R taken from the system.
 
-    def __init__(self, system: DiscreteSystem, P0: np.ndarray | None = None):
+    Divergence: a Kalman filter driven far off (by a stream of garbage, say) can sit
+    where h is flat and never come back. When the normalised innovation squared stays
+    above ``lost_nis`` per usable output for ``lost_steps`` steps in a row, the filter
+    starts again from the domain centre with P0 (from where it converges)."""
+
+    def __init__(self, system: DiscreteSystem, P0: np.ndarray | None = None,
+                 lost_nis: float = 25.0, lost_steps: int = 50):
         super().__init__(system)
         self.Q = np.diag(system.process_noise_std**2)
         self.R = np.diag(system.measurement_noise_std**2)
         self.P0 = self.initial_covariance() if P0 is None else np.asarray(P0, dtype=float)
+        self.lost_nis, self.lost_steps = lost_nis, lost_steps
         self.reset()
 
     def reset(self, x0=None) -> None:
         self.x = self.initial_guess(x0)
         self.P = self.P0.copy()
+        self.inconsistent = 0  # steps in a row with an implausible innovation
+
+    def diverged(self, innov: np.ndarray, S: np.ndarray) -> bool:
+        """Count an implausible innovation; True (and a fresh start) once too many
+        came in a row."""
+        nis = float(innov @ np.linalg.solve(S, innov))
+        self.inconsistent = self.inconsistent + 1 if nis > self.lost_nis * innov.size else 0
+        if self.inconsistent < self.lost_steps:
+            return False
+        self.reset()
+        return True

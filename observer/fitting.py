@@ -52,11 +52,15 @@ def init_features(net: TanhMLP, scale: float, gen) -> None:
 
 
 def features(net: TanhMLP, v: np.ndarray) -> np.ndarray:
-    """Hidden activations plus a constant column, float64, ``(n, H + 1)``."""
-    W = net.hidden.weight.detach().double().numpy()
-    b = net.hidden.bias.detach().double().numpy()
-    shift, scale = net.in_shift.double().numpy(), net.in_scale.double().numpy()
-    phi = np.tanh(((v - shift) / scale) @ W.T + b)
+    """Last hidden layer's activations plus a constant column, float64, ``(n, H + 1)``."""
+    if len(net.mids):
+        with torch.no_grad():
+            phi = net.activations(torch.as_tensor(v, dtype=torch.float64)).numpy()
+    else:  # the common case, in numpy
+        W = net.hidden.weight.detach().double().numpy()
+        b = net.hidden.bias.detach().double().numpy()
+        shift, scale = net.in_shift.double().numpy(), net.in_scale.double().numpy()
+        phi = np.tanh(((v - shift) / scale) @ W.T + b)
     return np.hstack([phi, np.ones((v.shape[0], 1))])
 
 

@@ -1,4 +1,4 @@
-"""Inference of the KKL maps: one-hidden-layer tanh networks on numpy arrays.
+"""Inference of the KKL maps: tanh networks (one hidden layer, or more) on numpy arrays.
 
 Training happens in torch (:mod:`observer.maps`); :meth:`TanhMLP.export` folds the
 normalisations into the weights, so inference is exactly ``W2 tanh(W1 v + b1) + b2``
@@ -14,16 +14,19 @@ import numpy as np
 
 @dataclass
 class NumpyMLP:
-    """``W2 tanh(W1 v + b1) + b2`` on arrays of shape ``(..., n_in)``."""
+    """``W2 a + b2`` with ``a = tanh(W1 v + b1)`` then ``a = tanh(W a + b)`` for each
+    ``(W, b)`` of ``mid`` (none: one hidden layer), on arrays of shape ``(..., n_in)``."""
 
     W1: np.ndarray  # (H, n_in)
     b1: np.ndarray  # (H,)
     W2: np.ndarray  # (n_out, H)
     b2: np.ndarray  # (n_out,)
+    mid: tuple = ()  # ((W (H, H), b (H,)), ...): further hidden layers
 
     def __post_init__(self):
         self._W1T = np.ascontiguousarray(self.W1.T)
         self._W2T = np.ascontiguousarray(self.W2.T)
+        self._midT = [(np.ascontiguousarray(W.T), b) for W, b in self.mid]
 
     @property
     def n_in(self) -> int:
@@ -44,23 +47,33 @@ class NumpyMLP:
             h = flat[i:i + chunk] @ self._W1T
             h += self.b1
             np.tanh(h, out=h)
+            for WT, b in self._midT:
+                h = np.tanh(h @ WT + b)
             np.matmul(h, self._W2T, out=out[i:i + chunk])
             out[i:i + chunk] += self.b2
         return out.reshape(v.shape[:-1] + (self.n_out,))
 
     def vector(self, v: np.ndarray) -> np.ndarray:
         """Single-sample path (1-D ``v``): matrix-vector products, no batch overhead."""
-        return np.tanh(v @ self._W1T + self.b1) @ self._W2T + self.b2  # row-major: fastest
+        h = np.tanh(v @ self._W1T + self.b1)  # row-major: fastest
+        for WT, b in self._midT:
+            h = np.tanh(h @ WT + b)
+        return h @ self._W2T + self.b2
 
     def astype(self, dtype) -> NumpyMLP:
         """A copy with weights of another dtype (float32 doubles batched throughput)."""
         return NumpyMLP(*(np.asarray(a, dtype=dtype) for a in (self.W1, self.b1, self.W2,
-                                                               self.b2)))
+                                                               self.b2)),
+                        tuple((W.astype(dtype), b.astype(dtype)) for W, b in self.mid))
 
     def scaled_output(self, scale: np.ndarray) -> NumpyMLP:
         """The same network with its output multiplied by ``scale`` component-wise."""
-        return NumpyMLP(self.W1, self.b1, self.W2 * scale[:, None], self.b2 * scale)
+        return NumpyMLP(self.W1, self.b1, self.W2 * scale[:, None], self.b2 * scale,
+                        self.mid)
 
     def arrays(self) -> dict[str, np.ndarray]:
-        """The weights by name (W1, b1, W2, b2)."""
-        return {k: getattr(self, k) for k in ("W1", "b1", "W2", "b2")}
+        """The weights by name (W1, b1, W2, b2, and Wm<i>, bm<i> of each further layer)."""
+        out = {k: getattr(self, k) for k in ("W1", "b1", "W2", "b2")}
+        for i, (W, b) in enumerate(self.mid):
+            out[f"Wm{i}"], out[f"bm{i}"] = W, b
+        return out

@@ -43,6 +43,8 @@ class TrainingConfig:
     encoder_epochs: int = 0  # Adam epochs on all weights of T before the output solve
     decoder_epochs: int = 0  # Adam epochs on all weights of T* before the output solve
     output_solve: bool = True  # finish with the exact least-squares output layer
+    decoder_layers: int = 1  # hidden layers of T* (paper: 1)
+    finetune_epochs: int = 0  # Adam epochs on all weights of T and T* after the solve
     feature_scale: float = 4.0  # std x sqrt(n_in) of the initial hidden weights of T
     decoder_feature_scale: float | None = None  # the same for T* (None: feature_scale)
     ridge: float = 1e-9  # relative Tikhonov term of the output solve
@@ -58,7 +60,7 @@ class TrainingConfig:
     def __post_init__(self):
         if self.decoder_noise not in ("observer", "none"):
             raise ObserverError(f"decoder_noise={self.decoder_noise!r}: use 'observer' or 'none'")
-        for name in ("n_samples", "hidden", "batch_size", "horizon"):
+        for name in ("n_samples", "hidden", "batch_size", "horizon", "decoder_layers"):
             if getattr(self, name) < 1:
                 raise ObserverError(f"{name}={getattr(self, name)!r}: must be >= 1")
         if not self.output_solve and min(self.encoder_epochs, self.decoder_epochs) < 1:
@@ -125,7 +127,8 @@ def learn_encoder_T(system: DiscreteSystem, design: KKLDesign, cfg: TrainingConf
         init_features(encoder, cfg.feature_scale, gen)
     X, XK, S = (torch.as_tensor(a, dtype=torch.float64) for a in (x_np, xk_np, s_np))
     A_t = torch.as_tensor(contraction, dtype=torch.float64)
-    if cfg.encoder_epochs:
+
+    def descend(epochs: int, desc: str) -> None:
         with torch.no_grad():
             weight = 1.0 / encoder(X[:20000]).std(dim=0).clamp_min(1e-9) ** 2
 
@@ -133,11 +136,15 @@ def learn_encoder_T(system: DiscreteSystem, design: KKLDesign, cfg: TrainingConf
             res = encoder(XK[idx]) - (A_t * encoder(X[idx]) + S[idx])
             return (res**2 * weight).sum(dim=1).mean()
 
-        adam(encoder, loss_dyn, len(x_np), cfg.encoder_epochs, cfg, gen, "learn T (L_dyn)",
-             progress)
+        adam(encoder, loss_dyn, len(x_np), epochs, cfg, gen, desc, progress)
+
+    if cfg.encoder_epochs:
+        descend(cfg.encoder_epochs, "learn T (L_dyn)")
     if cfg.output_solve:
-        return encoder, solve_encoder_output(encoder, x_np, xk_np, s_np, contraction,
-                                             cfg.ridge)
+        residual = solve_encoder_output(encoder, x_np, xk_np, s_np, contraction, cfg.ridge)
+        if not cfg.finetune_epochs:
+            return encoder, residual
+        descend(cfg.finetune_epochs, "fine-tune T (L_dyn)")  # warm start: the LS solution
     with torch.no_grad():
         return encoder, (encoder(XK) - (A_t * encoder(X) + S)).double().numpy()
 
@@ -174,21 +181,25 @@ def learn_decoder_T_star(system: DiscreteSystem, Zs: np.ndarray, Zin: np.ndarray
     """
     center, half = system.domain_center, system.domain_halfwidth
     decoder = TanhMLP(Zs.shape[1], cfg.decoder_hidden or cfg.hidden, system.n_state,
-                      Zs.mean(0), Zs.std(0), center, half)
+                      Zs.mean(0), Zs.std(0), center, half, n_layers=cfg.decoder_layers)
     if cfg.output_solve:
         init_features(decoder, cfg.decoder_feature_scale or cfg.feature_scale, gen)
     Zin_t = torch.as_tensor(Zin, dtype=torch.float64)
     X = torch.as_tensor(x, dtype=torch.float64)
     half_t = torch.as_tensor(half, dtype=torch.float64)
-    if cfg.decoder_epochs:
-        def loss_recon(idx):
-            return (((decoder(Zin_t[idx]) - X[idx]) / half_t) ** 2).sum(dim=1).mean()
 
+    def loss_recon(idx):
+        return (((decoder(Zin_t[idx]) - X[idx]) / half_t) ** 2).sum(dim=1).mean()
+
+    if cfg.decoder_epochs:
         adam(decoder, loss_recon, len(x), cfg.decoder_epochs, cfg, gen, "learn T* (L_recon)",
              progress)
     if cfg.output_solve:
         F = features(decoder, Zin)
         set_output(decoder, ridge_solve(F.T @ F, F.T @ x, cfg.ridge).T)
+        if cfg.finetune_epochs:  # warm start: Adam from the least-squares solution
+            adam(decoder, loss_recon, len(x), cfg.finetune_epochs, cfg, gen,
+                 "fine-tune T* (L_recon)", progress)
     with torch.no_grad():
         err = (decoder(Zin_t).double().numpy() - x) / half
     return decoder, float((err**2).sum(axis=1).mean())

@@ -37,6 +37,34 @@ def test_numpy_export_matches_torch(rng):
     np.testing.assert_allclose(net.export().vector(v[0]), ref[0], rtol=1e-12, atol=1e-12)
 
 
+@pytest.mark.parametrize("layers", [2, 3])
+def test_deep_numpy_export_matches_torch(rng, layers):
+    net = TanhMLP(3, 16, 2, [0.1, 0, 0], [0.5, 1, 2], [1.0, -1.0], [3.0, 0.1], n_layers=layers)
+    v = rng.normal(size=(5000, 3))  # past one chunk of the batched path
+    with torch.no_grad():
+        ref = net(torch.as_tensor(v)).numpy()
+    out = net.export()
+    assert len(out.mid) == layers - 1
+    np.testing.assert_allclose(out(v), ref, rtol=1e-12, atol=1e-12)
+    np.testing.assert_allclose(out.vector(v[0]), ref[0], rtol=1e-12, atol=1e-12)
+
+
+def test_deep_warm_started_decoder_trains_saves_and_loads(system, tmp_path):
+    from ledsim.presets import observer_preset
+    from observer import checkpoint
+    from observer.training import train_kkl
+
+    design, cfg = observer_preset("default", system.Te)
+    cfg.n_samples, cfg.hidden, cfg.decoder_hidden = 5000, 60, 40
+    cfg.decoder_layers, cfg.finetune_epochs = 2, 1
+    obs, rep = train_kkl(system, design, cfg, progress=False)
+    assert len(obs.decoder_T_star.mid) == 1 and np.isfinite(rep.loss_recon)
+    path = checkpoint.save(obs, tmp_path / "deep.pt")
+    back = checkpoint.load(path, system)
+    z = obs.encode(system.sample_domain(np.random.default_rng(0), 50))
+    np.testing.assert_array_equal(back.decode(z), obs.decode(z))
+
+
 def exact_T(obs, system, x):
     return series_encoder(system, obs.eigenvalues, obs.B, x)
 

@@ -4,6 +4,8 @@ any input is either accepted inside its physical range or refused in one line.""
 import contextlib
 import io
 import math
+import os
+from collections import Counter
 
 import pytest
 from hypothesis import given, settings
@@ -15,6 +17,9 @@ from ledsim.physics.disturbances import DISTURBANCES, RANGES, DisturbanceError, 
 NUMBERS = st.one_of(st.floats(allow_nan=True, allow_infinity=True), st.integers(-10**20, 10**20),
                     st.sampled_from(["nan", "inf", "-inf", "1e308", "-0", "abc", "", "0x10"]))
 PARSER = build_parser()
+#: ``scripts/soak.py`` multiplies the examples; TRIED counts them per test.
+SOAK = int(os.environ.get("LEDSIM_SOAK", "1"))
+TRIED: Counter = Counter()
 FLOAT_FLAGS = [("run", "--distance", (0, 5)), ("run", "--noise-scale", (0, 100)),
                ("run", "--torque-limit", (0, 10)), ("run", "--seconds", (0, 3600)),
                ("simulate", "--gimbal-angle", (-math.pi, math.pi)),
@@ -42,9 +47,10 @@ def accepted(command, flag, value):
 
 
 @pytest.mark.parametrize("command,flag,bounds", FLOAT_FLAGS)
-@settings(max_examples=60, deadline=None)
+@settings(max_examples=60 * SOAK, deadline=None)
 @given(value=NUMBERS)
 def test_float_flags_accept_exactly_finite_values_in_range(command, flag, bounds, value):
+    TRIED[f"{command} {flag}"] += 1
     try:
         number = float(value)
     except (TypeError, ValueError):
@@ -57,9 +63,10 @@ def test_float_flags_accept_exactly_finite_values_in_range(command, flag, bounds
 
 
 @pytest.mark.parametrize("command,flag,bounds", INT_FLAGS)
-@settings(max_examples=60, deadline=None)
+@settings(max_examples=60 * SOAK, deadline=None)
 @given(value=NUMBERS)
 def test_integer_flags_accept_exactly_integers_in_range(command, flag, bounds, value):
+    TRIED[f"{command} {flag}"] += 1
     text = str(value)
     try:
         number = int(text)
@@ -69,10 +76,11 @@ def test_integer_flags_accept_exactly_integers_in_range(command, flag, bounds, v
     assert accepted(command, flag, text) == ok
 
 
-@settings(max_examples=300, deadline=None)
+@settings(max_examples=300 * SOAK, deadline=None)
 @given(name=st.sampled_from(sorted(DISTURBANCES)), key=st.sampled_from(sorted(RANGES)),
        value=NUMBERS)
 def test_disturbance_specs_are_built_or_refused_by_name(name, key, value):
+    TRIED["disturbance spec"] += 1
     spec = f"{name}:{key}={value}"
     try:
         d = parse_disturbance(spec)

@@ -24,6 +24,8 @@ class ExtendedKalmanFilter(GaussianFilter):
             H = self.system.h_jacobian(self.x)[ok]
             innov = (y - self.system.h(self.x))[ok]
             S = H @ self.P @ H.T + self.R[np.ix_(ok, ok)]
+            if self.diverged(innov, S):
+                return self.x.copy()
             K = np.linalg.solve(S, H @ self.P).T
             self.x = self.x + K @ innov
             IKH = np.eye(self.x.size) - K @ H

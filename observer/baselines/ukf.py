@@ -59,6 +59,8 @@ class UnscentedKalmanFilter(GaussianFilter):
             dX = X - self.x
             S = (self.Wc * dY.T) @ dY + self.R[np.ix_(ok, ok)]
             C = (self.Wc * dX.T) @ dY
+            if self.diverged(y[ok] - y_mean, S):
+                return self.x.copy()
             K = np.linalg.solve(S, C.T).T
             self.x = self.x + K @ (y[ok] - y_mean)
             self.P = self.P - K @ S @ K.T
