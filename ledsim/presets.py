@@ -15,7 +15,7 @@ if TYPE_CHECKING:  # torch is imported only when training
 from .errors import LedsimError
 
 #: Names accepted by :func:`observer_preset` (``ledsim train --design``).
-PRESETS = ("default", "low-light", "slow", "paper")
+PRESETS = ("default", "low-light", "slow", "deep", "paper")
 
 #: Filter rates r of the default design: eigenvalues 1 - Te r per photodiode. The
 #: paper's slowest rate (r = 1, eigenvalue 0.99) makes T too hard to learn precisely.
@@ -33,7 +33,10 @@ def observer_preset(name: str, Te: float) -> tuple[KKLDesign, TrainingConfig]:
     least-squares output layers, and a decoder trained on the z noise it will see.
     ``"low-light"``: the default with slower filters and 1000-unit maps: lower RMSE on
     weak links, but slower to forget its initial guess (``docs/observer.md``).
-    ``"slow"``: slower still (rates 0.1-10), the long-memory half of ``kkl-handover``."""
+    ``"slow"``: slower still (rates 0.1-10), the long-memory half of ``kkl-handover``.
+    ``"deep"``: the paper's gradient training (Adam on every weight of T and T*) on the
+    default's split design, with the best gradient-trained decoder measured by
+    ``scripts/ablation.py`` (``docs/ablation.md``)."""
     from observer.training import TrainingConfig
 
     if name == "paper":
@@ -45,6 +48,9 @@ def observer_preset(name: str, Te: float) -> tuple[KKLDesign, TrainingConfig]:
     if name == "low-light":
         return KKLDesign.split(Te, LOW_LIGHT_RATES, name="low-light"), TrainingConfig(
             hidden=1000, decoder_hidden=1000, decoder_feature_scale=2.0)
+    if name == "deep":
+        return KKLDesign.split(Te, DEFAULT_RATES, name="deep"), TrainingConfig(
+            output_solve=False, encoder_epochs=30, decoder_epochs=30, decoder_layers=3)
     if name == "slow":
         return KKLDesign.split(Te, SLOW_RATES, name="slow"), TrainingConfig(
             hidden=1000, decoder_hidden=1000, decoder_feature_scale=2.0)

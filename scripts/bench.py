@@ -1,9 +1,11 @@
 """Speed benchmarks (not tests): observer step costs, batched throughput, training time.
 
 Ratios are measured in one run, next to absolute times, because this machine is noisy.
-Writes docs/bench.md (and prints it).
+BLAS and torch run on one thread (pinned here, before numpy is imported) unless a row
+says otherwise. Writes docs/bench.md (and prints it); ``--json PATH`` also writes the
+headline figures as JSON.
 
-    python scripts/bench.py [--quick]
+    python scripts/bench.py [--quick] [--json PATH]
 """
 
 from __future__ import annotations
@@ -11,7 +13,12 @@ from __future__ import annotations
 import argparse
 import os
 
+# Before numpy (and its BLAS) is imported: one thread, so "one core" means one core.
+os.environ["OMP_NUM_THREADS"] = "1"
+os.environ["OPENBLAS_NUM_THREADS"] = "1"
+os.environ["MKL_NUM_THREADS"] = "1"
 os.environ.setdefault("MUJOCO_GL", "osmesa")
+import json
 import platform
 import time
 from pathlib import Path
@@ -76,6 +83,32 @@ def world_speed(timestep: float, seconds: float = 20.0, repeats: int = 3) -> tup
     return steps / best, seconds / best
 
 
+def rollout_speed(n_worlds: int, seconds: float = 5.0) -> float:
+    """Control steps per second of ``mujoco.rollout`` stepping ``n_worlds`` copies of the
+    scene open loop (physics only, one thread): the batched floor."""
+    import mujoco
+    from mujoco import rollout
+
+    from ledsim.physics.world import LinkWorld
+
+    world = LinkWorld()
+    m, d = world.model, world.data
+    substeps = round(world.config.constants.Te / m.opt.timestep)
+    n_steps = int(seconds / m.opt.timestep)
+    state = np.zeros(mujoco.mj_stateSize(m, mujoco.mjtState.mjSTATE_FULLPHYSICS))
+    mujoco.mj_getState(m, d, state, mujoco.mjtState.mjSTATE_FULLPHYSICS)
+    x0 = np.tile(state, (n_worlds, 1))
+    ctrl = np.zeros((n_worlds, n_steps, m.nu))
+    with rollout.Rollout(nthread=0) as r:
+        r.rollout([m] * n_worlds, [d], x0, ctrl)  # warm up
+        best = np.inf
+        for _ in range(3):
+            t0 = time.perf_counter()
+            r.rollout([m] * n_worlds, [d], x0, ctrl)
+            best = min(best, time.perf_counter() - t0)
+    return n_worlds * n_steps / substeps / best
+
+
 def closed_loop_speed(estimator: str) -> tuple[float, float]:
     """(real-time factor of the whole loop, estimator us per step), align scenario."""
     from ledsim.loop.closed_loop import run_once
@@ -123,9 +156,9 @@ def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__)
     ap.add_argument("--quick", action="store_true", help="skip the training benchmark")
     ap.add_argument("--out", default=str(ROOT / "docs" / "bench.md"))
+    ap.add_argument("--json", metavar="PATH", help="also write the headline figures as JSON")
     args = ap.parse_args()
     torch.set_num_threads(1)
-    os.environ.setdefault("OMP_NUM_THREADS", "1")
     system = LEDLinkModel(LinkConstants())
     kkl = checkpoint.load(default_checkpoint(0.085), system)
     rng = np.random.default_rng(1)
@@ -153,15 +186,21 @@ def main() -> None:
     lines += ["", "## MuJoCo world: physics + ray-based sensor, open loop (one core)", "",
               "| physics timestep | substeps per Te | control steps / s | real-time factor |",
               "|---|---|---|---|"]
+    floor = {}
     for dt in (0.002, 0.005, 0.01):
-        sps, rtf = world_speed(dt)
+        sps, rtf = floor[dt] = world_speed(dt)
         lines.append(f"| {dt * 1e3:g} ms | {round(0.01 / dt)} | {sps:.3g} | {rtf:.0f}x |")
+    n_roll = 64
+    roll = rollout_speed(n_roll)
+    lines += ["", f"`mujoco.rollout` of {n_roll} worlds, physics only, open loop, one "
+              f"thread: {roll:.3g} control steps / s."]
     lines += ["", "## Closed loop in MuJoCo (align scenario, 10 s, one core)", "",
-              "| estimator | real-time factor of the loop | estimator us / step |",
-              "|---|---|---|"]
+              "| estimator | real-time factor of the loop | over the physics+rays floor "
+              "| estimator us / step |", "|---|---|---|---|"]
+    loop = {}
     for est in ("kkl", "ekf", "ukf", "pf", "oracle"):
-        rtf, us = closed_loop_speed(est)
-        lines.append(f"| {est} | {rtf:.0f}x | {us:.1f} |")
+        rtf, us = loop[est] = closed_loop_speed(est)
+        lines.append(f"| {est} | {rtf:.0f}x | {rtf / floor[0.002][1]:.2f} | {us:.1f} |")
     full, bare = render_speed()
     lines += ["", f"## Rendering ({os.environ.get('MUJOCO_GL', 'default')} backend, "
               "640x480, side camera)", "", "| what | frames / s |", "|---|---|",
@@ -177,6 +216,18 @@ def main() -> None:
     text = "\n".join(lines) + "\n"
     atomic_write_text(Path(args.out), text)
     print(text)
+    if args.json:
+        figures = {
+            "floor_rtf": floor[0.002][1], "floor_steps_per_s": floor[0.002][0],
+            "loop_rtf": {k: v[0] for k, v in loop.items()},
+            "floor_ratio_single": loop["kkl"][0] / floor[0.002][1],
+            "kkl_over_ekf_loop_speed": loop["kkl"][0] / loop["ekf"][0],
+            "rollout_steps_per_s": roll, "rollout_worlds": n_roll,
+            # No batched closed loop yet: nothing to measure, so nothing is claimed.
+            "batched_steps_per_s": None, "floor_ratio_batched": None,
+            "render_fps": full, "render_fps_bare": bare,
+            "threads": {"blas": os.environ["OPENBLAS_NUM_THREADS"], "torch": 1}}
+        atomic_write_text(Path(args.json), json.dumps(figures, indent=2) + "\n")
 
 
 if __name__ == "__main__":

@@ -218,3 +218,17 @@ def test_workers_die_with_their_parent(tmp_path):
         assert not any(_alive(w) for w in workers)
     finally:
         proc.kill()
+
+
+def test_train_design_deep_trains_a_gradient_decoder_of_three_layers(tmp_path):
+    from ledsim.paper.model import LEDLinkModel
+    from observer import checkpoint
+
+    out = tmp_path / "deep.pt"
+    r = run_cli("train", "--design", "deep", "--samples", "1000", "-q", "--out", str(out))
+    assert r.returncode == 0, r.stderr
+    from ledsim.config import LinkConstants
+
+    obs = checkpoint.load(out, LEDLinkModel(LinkConstants()))
+    assert len(obs.decoder_T_star.mid) == 2
+    assert obs.training_metadata["training"]["output_solve"] is False
