@@ -1,7 +1,7 @@
 """Measure each design choice of the default KKL observer against the paper's recipe,
 and the paper's gradient training (Adam on T and T*) on the working design.
 
-    python scripts/ablation.py          # about 30 minutes on 2 cores
+    python scripts/ablation.py          # about 20 minutes on 2 cores
     python scripts/ablation.py --only gradient   # the second table only
 
 For each variant: training time, the error of the learned T against the exact series
@@ -57,8 +57,9 @@ def gradient_variants(Te):
     return [
         ("split B, Adam on T and T* (500 units), noise-free decoder", split, adam_cfg),
         ("+ noise-aware decoder", split, dataclasses.replace(adam_cfg, decoder_noise="observer")),
-        ("+ decoder of 3 hidden layers (500 units each)", split,
-         dataclasses.replace(adam_cfg, decoder_noise="observer", decoder_layers=3)),
+        ("+ decoder of 2 hidden layers (256 units each)", split,
+         dataclasses.replace(adam_cfg, decoder_noise="observer", decoder_layers=2,
+                             decoder_hidden=256)),
     ]
 
 

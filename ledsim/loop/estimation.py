@@ -11,11 +11,13 @@ rescaled powers carry. One configuration thus serves every distance.
 from __future__ import annotations
 
 import json
+import math
 from dataclasses import dataclass, replace
 from pathlib import Path
 
 from observer import checkpoint as ckpt
 from observer.bank import ObserverBank
+from observer.baselines import ParticleFilter
 
 from ..estimators import build_estimator
 from ..physics.scene import WorldConfig
@@ -93,8 +95,12 @@ def loop_estimator(cfg: RunConfig, system: GimbalSystem, model: IdentifiedGimbal
     """(estimator, the system whose gain its model has) for a run in ``system``'s world;
     the estimator is None for the oracle."""
     if cfg.estimator != "kkl":
-        return build_estimator(cfg.estimator, system, model=model,
-                               particles=cfg.particles), system
+        est = build_estimator(cfg.estimator, system, model=model, particles=cfg.particles)
+        if cfg.supervision and isinstance(est, ParticleFilter):
+            # Under supervision a loss is the supervisor's to handle, for every estimator
+            # alike: the filter's own re-draw fired on half-occluded samples and kicks.
+            est.lost_chi2 = math.inf
+        return est, system
     members = kkl_members(cfg)
     first = members[0].world
     ref = system if first == system.config else GimbalSystem(first)
