@@ -12,7 +12,7 @@ $(STAMP): pyproject.toml
 	@bash scripts/install_system_deps.sh
 	@test -x $(BIN)/python || $(PY) -m venv $(VENV)
 	$(BIN)/pip install -q torch==2.13.0
-	$(BIN)/pip install -q -e '.[dev]'
+	$(BIN)/pip install -q -e '.[dev,ray]'
 	@touch $(STAMP)
 
 demo: $(STAMP)

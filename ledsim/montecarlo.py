@@ -1,4 +1,5 @@
-"""The one Monte-Carlo runner: a list of independent jobs, serial or on worker processes.
+"""The one Monte-Carlo runner: a list of independent jobs, serial, on worker processes
+or on a Ray cluster (:func:`run_jobs_ray`).
 
 Every table, ``ledsim evaluate``, ``ledsim run`` and the disturbance table go through
 :func:`run_jobs`. A job is ``fn(arg)`` with a picklable ``arg``; each job derives all its
@@ -18,6 +19,11 @@ from typing import TypeVar
 
 from tqdm.auto import tqdm
 
+from .errors import LedsimError
+
+#: Threads of each Ray worker: one, so that N workers use N cores (set before numpy loads).
+WORKER_ENV = {k: "1" for k in ("OMP_NUM_THREADS", "OPENBLAS_NUM_THREADS",
+                               "MKL_NUM_THREADS")}
 T = TypeVar("T")
 R = TypeVar("R")
 
@@ -40,7 +46,8 @@ def _init_worker() -> None:
 
 
 def run_jobs(fn: Callable[[T], R], jobs: Sequence[T], workers: int = 1, desc: str = "",
-             progress: bool = True) -> list[R]:
+             progress: bool = True,
+             on_result: Callable[[T, R], None] | None = None) -> list[R]:
     """``[fn(job) for job in jobs]``, on ``workers`` processes when that helps.
 
     Args:
@@ -49,11 +56,65 @@ def run_jobs(fn: Callable[[T], R], jobs: Sequence[T], workers: int = 1, desc: st
         workers: processes; 1 runs in this process.
         desc: label of the progress bar (on stderr).
         progress: show the progress bar.
+        on_result: called in this process with ``(job, result)`` as each job finishes
+            (in job order), e.g. to save it so that an interrupted run can resume.
     """
     bar = dict(total=len(jobs), desc=desc, disable=not progress, leave=False,
                file=sys.stderr)
     workers = min(workers, len(jobs))
     if workers <= 1:
-        return [fn(j) for j in tqdm(jobs, **bar)]
+        return _collect(jobs, (fn(j) for j in jobs), bar, on_result)
     with ProcessPoolExecutor(workers, initializer=_init_worker) as pool:
-        return list(tqdm(pool.map(fn, jobs, chunksize=1), **bar))
+        return _collect(jobs, pool.map(fn, jobs, chunksize=1), bar, on_result)
+
+
+def run_jobs_ray(fn: Callable[[T], R], jobs: Sequence[T], workers: int = 2,
+                 address: str | None = None, desc: str = "", progress: bool = True,
+                 on_result: Callable[[T, R], None] | None = None) -> list[R]:
+    """:func:`run_jobs` on Ray: a running cluster at ``address`` (e.g. ``auto`` or
+    ``ray://head:10001``), or a private local instance of ``workers`` CPUs when None.
+
+    Each job takes one CPU and runs with one BLAS thread (:data:`WORKER_ENV`).
+    ``on_result`` is called here, in this process, as jobs finish (in any order); the
+    returned list is in job order.
+    """
+    try:
+        import ray
+    except ImportError:
+        raise LedsimError("--backend ray needs Ray: pip install 'ledsim[ray]'") from None
+    started = not ray.is_initialized()
+    if started:
+        kw = dict(num_cpus=workers) if address is None else {}
+        ray.init(address=address, include_dashboard=False, log_to_driver=False,
+                 configure_logging=False, runtime_env={"env_vars": WORKER_ENV}, **kw)
+    pending: dict = {}
+    results: dict[int, R] = {}
+    try:
+        remote = ray.remote(num_cpus=1, max_retries=2)(fn)
+        pending = {remote.remote(job): k for k, job in enumerate(jobs)}
+        with tqdm(total=len(jobs), desc=desc, disable=not progress, leave=False,
+                  file=sys.stderr) as bar:
+            while pending:
+                ready, _ = ray.wait(list(pending), num_returns=1)
+                k = pending.pop(ready[0])
+                results[k] = ray.get(ready[0])
+                if on_result is not None:
+                    on_result(jobs[k], results[k])
+                bar.update()
+    except KeyboardInterrupt:
+        for ref in pending:
+            ray.cancel(ref, force=True)
+        raise
+    finally:
+        if started:
+            ray.shutdown()
+    return [results[k] for k in range(len(jobs))]
+
+
+def _collect(jobs, stream, bar: dict, on_result) -> list:
+    results = []
+    for job, res in zip(jobs, tqdm(stream, **bar), strict=False):
+        if on_result is not None:
+            on_result(job, res)
+        results.append(res)
+    return results

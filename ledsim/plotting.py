@@ -152,3 +152,39 @@ def plot_powers_by_distance(traces: dict, Te: float, title: str, path: Path) -> 
     axes[1].set_xlabel("time [s]")
     fig.tight_layout()
     return _save(fig, path)
+
+
+def plot_sweep(summary: list[dict], path: Path) -> Path:
+    """Availability and steady-state x1 RMSE of a sweep: one group of bars per
+    (disturbance, distance, noise scale), one bar per estimator, error bars over seeds."""
+    plt = _pyplot()
+    estimators = list(dict.fromkeys(s["estimator"] for s in summary))
+    combos = list(dict.fromkeys((s["disturbance"], s["distance"], s["noise_scale"])
+                                for s in summary))
+    by = {(s["estimator"], s["disturbance"], s["distance"], s["noise_scale"]): s
+          for s in summary}
+    width = 0.8 / len(estimators)
+    x = np.arange(len(combos))
+    fig, axes = plt.subplots(2, 1, figsize=(max(6.0, 1.2 * len(combos) + 3), 6.5),
+                             sharex=True)
+    for ax, metric, label, log in ((axes[0], "availability", "availability [-]", False),
+                                   (axes[1], "rmse_steady_x1", "steady x1 RMSE [rad]",
+                                    True)):
+        for k, est in enumerate(estimators):
+            rows = [by.get((est, *c)) for c in combos]
+            mean = [np.nan if r is None or r[f"{metric}_mean"] is None
+                    else r[f"{metric}_mean"] for r in rows]
+            std = [0.0 if r is None or r[f"{metric}_std"] is None
+                   else r[f"{metric}_std"] for r in rows]
+            ax.bar(x + (k - (len(estimators) - 1) / 2) * width, mean, width, yerr=std,
+                   label=est, capsize=2)
+        ax.set_ylabel(label)
+        ax.grid(alpha=0.3, axis="y")
+        if log:
+            ax.set_yscale("log")
+    axes[0].legend(fontsize=8, ncol=len(estimators))
+    axes[1].set_xticks(x, [f"{d}\nd={r:g} m, noise x{n:g}" for d, r, n in combos],
+                       fontsize=7)
+    axes[0].set_title("sweep: mean and spread over seeds")
+    fig.tight_layout()
+    return _save(fig, path)

@@ -197,6 +197,42 @@ def build_parser() -> argparse.ArgumentParser:
     rd.add_argument("--seed", type=SEED, default=0, help="noise and disturbance seed")
     rd.add_argument("--out", required=True, help="video file (.mp4)")
 
+    sw = command("sweep", "a grid of closed-loop runs (estimators x disturbances x "
+                 "distances x noise scales x seeds), locally or on a Ray cluster")
+    from ..loop.config import LOOP_ESTIMATORS, PHYSICS_SCENARIOS
+    from ..loop.sweep import BACKENDS
+
+    sw.add_argument("--estimator", action="append", choices=list(LOOP_ESTIMATORS),
+                    metavar="{" + ",".join(LOOP_ESTIMATORS) + "}",
+                    help="estimator (repeatable; default: kkl)")
+    sw.add_argument("--disturbance", action="append", metavar="SPEC",
+                    help="disturbance of one cell: none, name[:key=value,...], or several "
+                    "joined by + (repeatable; default: none)")
+    sw.add_argument("--distance", action="append", type=DISTANCE,
+                    help="link distance d [m] (repeatable; default: 0.085)")
+    sw.add_argument("--noise-scale", action="append", type=number(0.0, 100.0, lo_open=True),
+                    help="multiplies the measurement-noise std (repeatable; default: 1)")
+    sw.add_argument("--seeds", type=SEEDS, default=2, help="runs per combination")
+    sw.add_argument("--scenario", default="align", **_choices(PHYSICS_SCENARIOS),
+                    help="closed-loop scenario")
+    sw.add_argument("--seconds", type=SECONDS, default=None,
+                    help="length of each run [s] (default: the scenario's, 10 s)")
+    sw.add_argument("--particles", type=PARTICLES, default=2000, help="particle-filter size")
+    sw.add_argument("--torque-limit", type=TORQUE_LIMIT, default=0.05, help="[N m]")
+    sw.add_argument("--no-supervision", action="store_true",
+                    help="no loss detection or reacquisition (see ledsim run)")
+    sw.add_argument("--scene", help="MJCF scene file (default: the shipped led_link.xml)")
+    sw.add_argument("--backend", default="local", **_choices(BACKENDS),
+                    help="local processes, or Ray (pip install 'ledsim[ray]')")
+    sw.add_argument("--address", default=None,
+                    help="Ray cluster to join (e.g. auto, or ray://HEAD:10001); default: "
+                    "start a local Ray instance of --workers CPUs")
+    sw.add_argument("--workers", type=WORKERS, default=2,
+                    help="processes (local) or CPUs of a local Ray instance")
+    sw.add_argument("--no-plot", action="store_true", help="skip summary.png")
+    sw.add_argument("--out", required=True,
+                    help="output folder; rerun the same command to resume")
+
     dm = command("demo", "main job: closed-loop alignment with every estimator")
     dm.add_argument("--seeds", type=number(1, 1000, integer=True), default=2,
                     help="Monte-Carlo runs per estimator")
@@ -230,13 +266,22 @@ def main(argv: list[str] | None = None) -> int:
     from . import commands
 
     args = build_parser().parse_args(argv)
-    signal.signal(signal.SIGINT, _on_sigint)
+    INTERRUPTED.clear()
+    previous = signal.signal(signal.SIGINT, _on_sigint)
+    try:
+        return _dispatch(commands, args, (LedsimError, ObserverError))
+    finally:  # main() may be called in-process (tests, notebooks): leave no trace
+        signal.signal(signal.SIGINT, previous)
+        INTERRUPTED.clear()
+
+
+def _dispatch(commands, args, user_errors: tuple) -> int:
     # Results go to stdout; progress bars (tqdm) and diagnostics (logging) to stderr.
     logging.basicConfig(format="ledsim: %(message)s",
                         level=logging.WARNING if args.quiet else logging.INFO)
     try:
         code = getattr(commands, args.command)(args)
-    except (LedsimError, ObserverError) as exc:
+    except user_errors as exc:
         if not INTERRUPTED.is_set():
             print(f"ledsim: error: {exc}", file=sys.stderr)
             return EXIT_USAGE

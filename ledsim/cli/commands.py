@@ -183,3 +183,26 @@ def train(args) -> int:
     log.info(f"trained {args.design} observer in {report.seconds:.1f} s: "
           f"L_dyn={report.loss_dyn:.2e}, L_recon={report.loss_recon:.2e}; wrote {path}")
     return 0
+
+
+def sweep(args) -> int:
+    from ..loop.config import RunConfig
+    from ..loop.sweep import SweepGrid, run_sweep
+
+    if args.address is not None and args.backend != "ray":
+        raise LedsimError("--address needs --backend ray")
+    base = RunConfig(scenario=args.scenario, torque_limit=args.torque_limit,
+                     particles=args.particles, seconds=args.seconds, scene=args.scene,
+                     supervision=not args.no_supervision)
+    grid = SweepGrid(estimators=args.estimator or ["kkl"],
+                     disturbances=args.disturbance or ["none"],
+                     distances=args.distance or [0.085],
+                     noise_scales=args.noise_scale or [1.0], seeds=args.seeds, base=base)
+    out = check_out_dir(args.out)
+    t0 = time.perf_counter()
+    rows, paths = run_sweep(grid, out, args.backend, args.workers, args.address,
+                            progress=not args.quiet, plot=not args.no_plot)
+    log.info(f"{len(rows)} runs in {time.perf_counter() - t0:.0f} s; wrote "
+             f"{', '.join(str(p) for p in paths)}")
+    print((out / "summary.csv").read_text(), end="")
+    return 0

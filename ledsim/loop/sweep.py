@@ -1,0 +1,276 @@
+"""Parameter sweeps of the closed loop: a grid of runs, on this machine or a Ray cluster.
+
+A sweep is the product estimators x disturbances x distances x noise scales x seeds;
+each cell is one :func:`~ledsim.loop.closed_loop.run_once`. Cells derive every random
+number from their own seed, so a cell's result does not depend on where or in which
+order it runs: the ``local`` and ``ray`` backends give the same ``results.csv`` except
+for the timing columns (:data:`TIMING_COLUMNS`).
+
+The output folder holds ``cells/`` (one JSON file per finished cell, written
+atomically as it finishes), and, once every cell is done, ``results.csv`` (one row per
+run, grid order), ``summary.csv`` (mean and spread over seeds) and ``summary.png``.
+Running the same command again skips the cells already in ``cells/``: an interrupted
+sweep resumes where it stopped.
+"""
+
+from __future__ import annotations
+
+import csv
+import hashlib
+import io
+import itertools
+import json
+import logging
+import math
+import re
+from collections.abc import Sequence
+from dataclasses import asdict, dataclass, replace
+from pathlib import Path
+
+import numpy as np
+
+from observer.atomic import atomic_write_text
+from observer.metrics import mean_and_spread
+
+from ..errors import LedsimError
+from .config import RunConfig
+
+log = logging.getLogger("ledsim")
+
+BACKENDS = ("local", "ray")
+#: "none" stands for no disturbance; "+" joins several disturbances into one cell.
+NO_DISTURBANCE = "none"
+#: Columns of ``results.csv`` that describe the cell.
+CELL_COLUMNS = ("scenario", "estimator", "disturbance", "distance", "noise_scale", "seed",
+                "seconds", "supervision")
+#: Columns that measure the run (units as in :class:`~ledsim.loop.metrics.RunMetrics`).
+METRIC_COLUMNS = ("rmse_x1", "rmse_x2", "rmse_steady_x1", "rmse_steady_x2",
+                  "alignment_time", "availability", "mean_power", "recovery_time",
+                  "lost_share", "detection_delay", "losses")
+#: Columns that depend on the machine and its load: the only ones that may differ
+#: between backends or reruns.
+TIMING_COLUMNS = ("us_per_step", "realtime_factor")
+COLUMNS = CELL_COLUMNS + METRIC_COLUMNS + TIMING_COLUMNS
+
+
+def split_disturbance(cell: str) -> tuple[str, ...]:
+    """The disturbance specs of one sweep cell: ``none`` -> (), ``a+b`` -> (a, b)."""
+    if cell.strip() == NO_DISTURBANCE:
+        return ()
+    return tuple(p for p in re.split(r"\+(?=[a-z])", cell) if p)
+
+
+@dataclass(frozen=True)
+class Cell:
+    """One run of the grid (plain data: it travels to processes and Ray workers)."""
+
+    estimator: str
+    disturbance: str
+    distance: float
+    noise_scale: float
+    seed: int
+
+    def key(self, base: RunConfig) -> str:
+        """Identifies the cell and every setting that changes its result."""
+        common = {k: v for k, v in asdict(base).items()
+                  if k not in ("seeds", "workers", "estimator", "disturbances", "distance",
+                               "noise_scale")}
+        return json.dumps({**asdict(self), **common}, sort_keys=True)
+
+    def file_name(self, base: RunConfig) -> str:
+        return hashlib.sha1(self.key(base).encode()).hexdigest()[:20] + ".json"
+
+
+@dataclass
+class SweepGrid:
+    """The grid of a sweep and the settings every cell shares.
+
+    Attributes:
+        estimators: keys of :data:`~ledsim.loop.config.LOOP_ESTIMATORS`.
+        disturbances: cells of disturbance specs (:func:`split_disturbance`).
+        distances: link distances d [m].
+        noise_scales: multipliers of the measurement-noise std [-].
+        seeds: runs per combination (seeds 0..seeds-1).
+        base: everything else (scenario, seconds, particles, torque limit, ...).
+    """
+
+    estimators: Sequence[str]
+    disturbances: Sequence[str]
+    distances: Sequence[float]
+    noise_scales: Sequence[float]
+    seeds: int
+    base: RunConfig
+
+    def cells(self) -> list[Cell]:
+        return [Cell(e, d, float(r), float(n), s) for e, d, r, n, s in itertools.product(
+            self.estimators, self.disturbances, self.distances, self.noise_scales,
+            range(self.seeds))]
+
+    def config(self, cell: Cell) -> RunConfig:
+        return replace(self.base, estimator=cell.estimator,
+                       disturbances=split_disturbance(cell.disturbance),
+                       distance=cell.distance, noise_scale=cell.noise_scale, seeds=1,
+                       workers=1)
+
+    def validate(self) -> None:
+        """Every combination is a valid run; refused in one line before any work."""
+        for name, seq in (("--estimator", self.estimators), ("--disturbance",
+                          self.disturbances), ("--distance", self.distances),
+                          ("--noise-scale", self.noise_scales)):
+            if not seq:
+                raise LedsimError(f"{name}: give at least one value")
+        from .estimation import check_checkpoint
+
+        for cell in {Cell(e, d, r, n, 0) for e, d, r, n in itertools.product(
+                self.estimators, self.disturbances, self.distances, self.noise_scales)}:
+            cfg = self.config(cell)
+            cfg.validate()
+            check_checkpoint(cfg)
+
+
+def run_cell(job: tuple[RunConfig, Cell]) -> dict:
+    """One row of ``results.csv`` (module level: it is shipped to the workers)."""
+    from .. import __version__
+    from .closed_loop import run_once
+
+    cfg, cell = job
+    out = run_once(cfg, cell.seed)
+    m = out.metrics
+    row = {"scenario": cfg.scenario, "estimator": cell.estimator,
+           "disturbance": cell.disturbance, "distance": cell.distance,
+           "noise_scale": cell.noise_scale, "seed": cell.seed, "seconds": cfg.run_seconds,
+           "supervision": cfg.supervision,
+           "rmse_x1": m.rmse["x1"], "rmse_x2": m.rmse["x2"],
+           "rmse_steady_x1": m.rmse_steady["x1"], "rmse_steady_x2": m.rmse_steady["x2"],
+           "alignment_time": m.alignment_time, "availability": m.availability,
+           "mean_power": m.mean_power, "recovery_time": m.recovery_time,
+           "lost_share": m.lost_share, "detection_delay": m.detection_delay,
+           "losses": len(m.link_events),
+           "us_per_step": out.us_per_step, "realtime_factor": out.realtime_factor}
+    return {"version": __version__, "row": {k: _plain(v) for k, v in row.items()}}
+
+
+def _plain(v):
+    if isinstance(v, np.generic):
+        v = v.item()
+    if isinstance(v, float) and not math.isfinite(v):
+        return None
+    return v
+
+
+class SweepStore:
+    """The folder of a sweep: finished cells in ``cells/``, tables and plot at the end."""
+
+    def __init__(self, out: Path, grid: SweepGrid):
+        self.out, self.grid = Path(out), grid
+        self.cells_dir = self.out / "cells"
+
+    def _path(self, cell: Cell) -> Path:
+        return self.cells_dir / cell.file_name(self.grid.base)
+
+    def load(self, cell: Cell) -> dict | None:
+        """The saved row of ``cell``, or None when it has not finished (or the file is
+        from another grid: the key is compared, not only the name)."""
+        path = self._path(cell)
+        if not path.is_file():
+            return None
+        try:
+            data = json.loads(path.read_text())
+        except (OSError, ValueError):
+            return None
+        return data["row"] if data.get("key") == cell.key(self.grid.base) else None
+
+    def save(self, cell: Cell, result: dict) -> None:
+        from .. import __version__
+
+        if result["version"] != __version__:
+            raise LedsimError(f"a worker runs ledsim {result['version']}, this machine "
+                              f"{__version__}: install the same version on every node")
+        self.cells_dir.mkdir(parents=True, exist_ok=True)
+        atomic_write_text(self._path(cell), json.dumps(
+            {"key": cell.key(self.grid.base), "row": result["row"]}, allow_nan=False))
+
+    def write_tables(self, rows: list[dict], plot: bool = True) -> list[Path]:
+        paths = [self.out / "results.csv", self.out / "summary.csv"]
+        atomic_write_text(paths[0], _csv(rows, COLUMNS))
+        summary = summarize(rows)
+        atomic_write_text(paths[1], _csv(summary, tuple(summary[0])))
+        if plot:
+            from ..plotting import plot_sweep
+
+            paths.append(plot_sweep(summary, self.out / "summary.png"))
+        return paths
+
+
+def _csv(rows: list[dict], columns: Sequence[str]) -> str:
+    buf = io.StringIO()
+    w = csv.DictWriter(buf, columns, lineterminator="\n")
+    w.writeheader()
+    for r in rows:
+        w.writerow({k: ("" if r[k] is None else repr(r[k]) if isinstance(r[k], float)
+                        else r[k]) for k in columns})
+    return buf.getvalue()
+
+
+def summarize(rows: list[dict]) -> list[dict]:
+    """Mean and spread (sample std) over seeds of each metric, per combination."""
+    groups: dict[tuple, list[dict]] = {}
+    keys = ("scenario", "estimator", "disturbance", "distance", "noise_scale")
+    for r in rows:
+        groups.setdefault(tuple(r[k] for k in keys), []).append(r)
+    out = []
+    for combo, rs in groups.items():
+        s = dict(zip(keys, combo, strict=True), runs=len(rs))
+        for m in ("rmse_steady_x1", "rmse_steady_x2", "availability", "recovery_time",
+                  "lost_share"):
+            vals = np.array([r[m] for r in rs if r[m] is not None], dtype=float)
+            mean, spread = mean_and_spread(vals) if len(vals) else (None, None)
+            s[f"{m}_mean"] = None if mean is None else float(mean)
+            s[f"{m}_std"] = None if spread is None else float(spread)
+        out.append(s)
+    return out
+
+
+def run_sweep(grid: SweepGrid, out: str | Path, backend: str = "local",
+              workers: int = 2, address: str | None = None, progress: bool = True,
+              plot: bool = True) -> tuple[list[dict], list[Path]]:
+    """Run every cell of ``grid`` not already finished in ``out``; write the tables.
+
+    Args:
+        grid: the sweep.
+        out: output folder (created; reused to resume).
+        backend: ``local`` (processes on this machine) or ``ray``.
+        workers: processes (local) or CPUs of the local Ray instance (ray without
+            ``address``).
+        address: a running Ray cluster (``ray`` backend), e.g. ``auto`` or
+            ``ray://head:10001``; None starts a local instance.
+        progress: progress bar on stderr.
+        plot: write ``summary.png``.
+
+    Returns:
+        the rows of ``results.csv`` and the paths written.
+    """
+    if backend not in BACKENDS:
+        raise LedsimError(f"unknown backend {backend!r}: choose one of {', '.join(BACKENDS)}")
+    grid.validate()
+    store = SweepStore(Path(out), grid)
+    cells = grid.cells()
+    done = {c: r for c in cells if (r := store.load(c)) is not None}
+    todo = [c for c in cells if c not in done]
+    if done:
+        log.info(f"resuming: {len(done)} of {len(cells)} runs already in {store.cells_dir}")
+    jobs = [(grid.config(c), c) for c in todo]
+
+    def keep(job, result) -> None:
+        store.save(job[1], result)
+        done[job[1]] = result["row"]
+
+    from ..montecarlo import run_jobs, run_jobs_ray
+
+    if backend == "local":
+        run_jobs(run_cell, jobs, workers, "sweep", progress, on_result=keep)
+    else:
+        run_jobs_ray(run_cell, jobs, workers, address, "sweep (ray)", progress,
+                     on_result=keep)
+    rows = [done[c] for c in cells]
+    return rows, store.write_tables(rows, plot)
