@@ -24,6 +24,12 @@ def receiver_response(phi, r: ReceiverResponse) -> np.ndarray:
             + r.a2 * np.exp(-(((phi + r.b2) / r.c2) ** 2)))
 
 
+def receiver_response_at(phi: float, r: ReceiverResponse) -> float:
+    """g(phi) for one angle [rad], in plain floats (the per-step paths; same formula)."""
+    u1, u2 = (phi - r.b1) / r.c1, (phi + r.b2) / r.c2
+    return r.a1 * math.exp(-u1 * u1) + r.a2 * math.exp(-u2 * u2)
+
+
 def receiver_response_derivative(phi, r: ReceiverResponse) -> np.ndarray:
     """dg/dphi [1/rad]."""
     phi = np.asarray(phi, dtype=float)
@@ -119,16 +125,22 @@ def pair_shape_inverse(powers, c: LinkConstants) -> tuple[float, float, float]:
         return math.nan, math.nan, math.inf
     table = _shape_table(c.receiver, c.dphi)
     phi = float(np.interp(math.log(p1 / p2), table, _SHAPE_PHI))
-    r = c.receiver
-    g1, g2 = float(receiver_response(phi, r)), float(receiver_response(phi + c.dphi, r))
+    g1, dg1 = _response_and_slope(phi, c.receiver)
+    g2, dg2 = _response_and_slope(phi + c.dphi, c.receiver)
     gain = (p1 * g1 + p2 * g2) / (g1 * g1 + g2 * g2)
-    d1 = gain * float(receiver_response_derivative(phi, r))
-    d2 = gain * float(receiver_response_derivative(phi + c.dphi, r))
+    d1, d2 = gain * dg1, gain * dg2
     det = d1 * g2 - d2 * g1  # J = [[d1, g1], [d2, g2]]
     if det == 0 or gain <= 0:
         return phi, gain, math.inf
     v = (d1 * d1 + d2 * d2) / det**2 / gain**2
     return phi, gain, v
+
+
+def _response_and_slope(phi: float, r: ReceiverResponse) -> tuple[float, float]:
+    """(g(phi), dg/dphi) for one angle, in plain floats (the per-step paths)."""
+    u1, u2 = (phi - r.b1) / r.c1, (phi + r.b2) / r.c2
+    e1, e2 = r.a1 * math.exp(-u1 * u1), r.a2 * math.exp(-u2 * u2)
+    return e1 + e2, -2 * u1 / r.c1 * e1 - 2 * u2 / r.c2 * e2
 
 
 @functools.lru_cache(maxsize=8)

@@ -52,16 +52,18 @@ class ResidualMonitor:
         half = np.asarray(system.domain_halfwidth, dtype=float)
         self.low = system.domain_center - (1 + domain_margin) * half
         self.high = system.domain_center + (1 + domain_margin) * half
+        self._low, self._high = self.low.tolist(), self.high.tolist()
         self.sigma0 = np.asarray(system.measurement_noise_std, dtype=float)
+        self._noise_floor = (0.25 * self.sigma0**2).tolist()
         self.reset()
 
     def reset(self) -> None:
         """Forget the residual history (after a re-seed); keep the noise level."""
-        self.mean_residual = np.zeros(self.system.n_output)
+        self._mean_residual = [0.0] * self.system.n_output
         self.statistic = 0.0
         self.lost = False
         self.reason = ""
-        if not hasattr(self, "noise_var"):
+        if not hasattr(self, "_noise_var"):
             self.noise_var = self.sigma0**2
             self._y_prev = None
 
@@ -70,14 +72,24 @@ class ResidualMonitor:
         """Current estimate of the measurement-noise standard deviation [W]."""
         return np.sqrt(self.noise_var)
 
-    def _learn_noise(self, y: np.ndarray, ok: np.ndarray) -> None:
-        prev = self._y_prev
+    def _learn_noise(self, y: list, ok: list) -> None:
+        # Plain floats: two outputs, and numpy's per-call overhead dominated the loop.
+        prev, var, a = self._y_prev, self._noise_var, self.noise_alpha
         if prev is not None:
-            both = ok & np.isfinite(prev)
-            d2 = np.where(both, 0.5 * (y - prev) ** 2, self.noise_var)
-            self.noise_var = (1 - self.noise_alpha) * self.noise_var + self.noise_alpha * d2
-            self.noise_var = np.maximum(self.noise_var, 0.25 * self.sigma0**2)
-        self._y_prev = np.where(ok, y, np.nan)
+            floor = self._noise_floor
+            for i, (yi, pi) in enumerate(zip(y, prev, strict=True)):
+                d2 = 0.5 * (yi - pi) ** 2 if ok[i] and math.isfinite(pi) else var[i]
+                var[i] = max((1 - a) * var[i] + a * d2, floor[i])
+        self._y_prev = [yi if oki else math.nan for yi, oki in zip(y, ok, strict=True)]
+
+    @property
+    def noise_var(self) -> np.ndarray:
+        """Current estimate of the measurement-noise variance [W^2]."""
+        return np.array(self._noise_var)
+
+    @noise_var.setter
+    def noise_var(self, value) -> None:
+        self._noise_var = [float(v) for v in np.broadcast_to(value, self.sigma0.shape)]
 
     def update(self, y: np.ndarray, xhat: np.ndarray) -> bool:
         """Take the measurement y_k and the estimate of x_k; return whether it is lost.
@@ -85,27 +97,33 @@ class ResidualMonitor:
         Missing or impossible samples (see :func:`usable_mask`) leave the residual
         average where it was.
         """
-        y = np.asarray(y, dtype=float)
-        xhat = np.asarray(xhat, dtype=float)
-        ok = usable_mask(self.system, y)
+        ok = usable_mask(self.system, y).tolist()
+        y = np.asarray(y, dtype=float).tolist()
+        xh = np.asarray(xhat, dtype=float).tolist()
         self._learn_noise(y, ok)
-        if not np.all(np.isfinite(xhat)):
+        if not all(math.isfinite(v) for v in xh):
             return self._flag(True, "non-finite estimate")
-        if np.any(xhat < self.low) or np.any(xhat > self.high):
+        if any(v < lo or v > hi for v, lo, hi in zip(xh, self._low, self._high, strict=True)):
             return self._flag(True, "estimate outside the domain")
-        if not ok.any():
+        if not any(ok):
             return self._flag(self.lost, self.reason)
-        yhat = np.asarray(self.system.h(xhat), dtype=float)
-        a = self.alpha
-        r = np.where(ok, y - yhat, 0.0)
-        self.mean_residual = np.where(ok, (1 - a) * self.mean_residual + a * r,
-                                      self.mean_residual)
-        # Allowed: the spread of the average under white noise, plus the model's own bias.
-        spread2 = self.noise_var * a / (2 - a) + (self.model_error * yhat) ** 2
-        self.statistic = float(np.sum(self.mean_residual**2 / spread2))
+        yhat = np.asarray(self.system.h(np.asarray(xhat, dtype=float)), dtype=float).tolist()
+        a, m, statistic = self.alpha, self._mean_residual, 0.0
+        for i, (yi, yhi) in enumerate(zip(y, yhat, strict=True)):
+            if ok[i]:
+                m[i] = (1 - a) * m[i] + a * (yi - yhi)
+            # Allowed: the spread of the average under white noise, plus the model's bias.
+            spread2 = self._noise_var[i] * a / (2 - a) + (self.model_error * yhi) ** 2
+            statistic += m[i] ** 2 / spread2
+        self.statistic = statistic
         if self.statistic > self.threshold:
             return self._flag(True, "output residual above the noise")
         return self._flag(False, "")
+
+    @property
+    def mean_residual(self) -> np.ndarray:
+        """Exponential average of the output residual y - h(x_hat) [W]."""
+        return np.array(self._mean_residual)
 
     def _flag(self, lost: bool, reason: str) -> bool:
         self.lost = bool(lost)
@@ -162,15 +180,30 @@ class GainTracker:
         Te = system.Te
         # Constant-rate model of log(ratio): a ramp (a drifting transmitter, a turning
         # hull) is followed without lag, while the rate itself changes slowly, so a
-        # gain that only wobbles (hull vibration) is averaged out.
-        self.F = np.array([[1.0, Te], [0.0, 1.0]])
-        self.Q = drift**2 * np.array([[Te**3 / 3, Te**2 / 2], [Te**2 / 2, Te]])
+        # gain that only wobbles (hull vibration) is averaged out. Two states: plain
+        # floats (numpy's per-call cost dominated the loop).
+        self.Te = Te
+        q = drift**2
+        self._Q = (q * Te**3 / 3, q * Te**2 / 2, q * Te)  # (00, 01, 11)
         self.deadband = deadband
         self.deadband_moving = deadband_moving
         self.max_variance = max_std**2
         self.alpha_powers = min(1.0, system.Te / tau_powers)
         self.min_power = min_snr * np.asarray(system.measurement_noise_std, dtype=float)
+        self._nominal_sigma = np.asarray(system.measurement_noise_std, dtype=float).tolist()
+        self._min_snr = float(min_snr)
         self.set(ratio, variance=0.0)
+
+    @property
+    def state(self) -> np.ndarray:
+        """(log ratio [-], its rate [1/s])."""
+        return np.array(self._s)
+
+    @property
+    def P(self) -> np.ndarray:
+        """Covariance of :attr:`state`."""
+        p00, p01, p11 = self._P
+        return np.array([[p00, p01], [p01, p11]])
 
     def normalize(self, y: np.ndarray) -> np.ndarray:
         """The measurement in the model's gain: ``y / ratio``."""
@@ -179,42 +212,53 @@ class GainTracker:
     @property
     def estimate(self) -> float:
         """The filter's current ratio [-] (``ratio`` is what the estimator sees)."""
-        return math.exp(self.state[0])
+        return math.exp(self._s[0])
 
     def update(self, y: np.ndarray, noise_std: np.ndarray | None = None) -> None:
         """Learn from one sample of raw powers ``y`` [W] (``noise_std``: the measured
         noise level [W], default the model's scaled by the ratio)."""
-        y = np.asarray(y, dtype=float)
-        self.state = self.F @ self.state
-        self.P = self.F @ self.P @ self.F.T + self.Q
-        if not np.all(np.isfinite(y)):
+        Te, (q00, q01, q11) = self.Te, self._Q
+        s0, s1 = self._s
+        p00, p01, p11 = self._P
+        s0 += Te * s1
+        p00, p01 = p00 + 2 * Te * p01 + Te * Te * p11 + q00, p01 + Te * p11 + q01
+        p11 += q11
+        self._s, self._P = (s0, s1), (p00, p01, p11)
+        y = np.asarray(y, dtype=float).tolist()
+        if not all(math.isfinite(v) for v in y):
             return
-        sigma = np.asarray(self.system.measurement_noise_std * self.ratio
-                           if noise_std is None else noise_std, dtype=float)
+        sigma = ([v * self.ratio for v in self._nominal_sigma] if noise_std is None
+                 else np.asarray(noise_std, dtype=float).tolist())
         a = self.alpha_powers
-        self.powers = y.copy() if self.powers is None else (1 - a) * self.powers + a * y
-        if not np.all(self.powers > self.min_power / self.system.measurement_noise_std
-                      * sigma):
+        self._powers = list(y) if self._powers is None else \
+            [(1 - a) * pw + a * v for pw, v in zip(self._powers, y, strict=True)]
+        if not all(pw > self._min_snr * sg for pw, sg in zip(self._powers, sigma,
+                                                               strict=True)):
             return
-        _, gain, v = self.shape_inverse(self.powers)
+        _, gain, v = self.shape_inverse(self._powers)
         if not (math.isfinite(gain) and gain > 0 and math.isfinite(v)):
             return
-        r = v * float(np.mean(sigma**2))  # variance of log(gain) from one sample
+        r = v * sum(sg * sg for sg in sigma) / len(sigma)  # variance of log(gain), 1 sample
         if r > self.max_variance:  # far off the peak: the pair barely fixes the gain
             return
-        P = self.P
-        k = P[:, 0] / (P[0, 0] + r)
-        self.state = self.state + k * (math.log(gain / self.model_gain) - self.state[0])
-        self.P = P - np.outer(k, P[0])
+        k0, k1 = p00 / (p00 + r), p01 / (p00 + r)
+        innovation = math.log(gain / self.model_gain) - s0
+        self._s = (s0 + k0 * innovation, s1 + k1 * innovation)
+        self._P = (p00 - k0 * p00, p01 - k0 * p01, p11 - k1 * p01)
         # A significant trend (a drift, not a wobble) is followed closely.
-        moving = abs(self.state[1]) > 3 * math.sqrt(self.P[1, 1])
+        moving = abs(self._s[1]) > 3 * math.sqrt(self._P[2])
         est, band = self.estimate, self.deadband_moving if moving else self.deadband
         self.ratio = min(max(self.ratio, est / (1 + band)), est / (1 - band))
+
+    @property
+    def powers(self) -> np.ndarray | None:
+        """The averaged powers the gain is inverted from [W] (None before any)."""
+        return None if self._powers is None else np.array(self._powers)
 
     def set(self, ratio: float, variance: float = 1e-4) -> None:
         """Restart from ``ratio`` [-], no trend, variance ``variance`` of its log."""
         if math.isfinite(ratio) and ratio > 0:
             self.ratio = float(ratio)
-            self.state = np.array([math.log(ratio), 0.0])
-            self.P = np.diag([variance, 0.01])
-            self.powers = None
+            self._s = (math.log(ratio), 0.0)
+            self._P = (float(variance), 0.0, 0.01)
+            self._powers = None

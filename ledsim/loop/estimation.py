@@ -49,6 +49,18 @@ def identified_model(system: GimbalSystem) -> IdentifiedGimbalModel:
     return _MODELS[key]
 
 
+_MEMBER_SYSTEMS: dict = {}
+
+
+def member_system(world: WorldConfig) -> GimbalSystem:
+    """The model system of a bank member's world, built once per process: it only
+    supplies constants, metadata and h (which sets its own state before each use), so
+    runs may share it; compiling the scene is most of a short run's set-up."""
+    if world not in _MEMBER_SYSTEMS:
+        _MEMBER_SYSTEMS[world] = GimbalSystem(world)
+    return _MEMBER_SYSTEMS[world]
+
+
 @dataclass(frozen=True)
 class KKLMember:
     """One KKL of a run: its noise level over the nominal [-], its checkpoint, and the
@@ -103,14 +115,14 @@ def loop_estimator(cfg: RunConfig, system: GimbalSystem, model: IdentifiedGimbal
         return est, system
     members = kkl_members(cfg)
     first = members[0].world
-    ref = system if first == system.config else GimbalSystem(first)
+    ref = system if first == system.config else member_system(first)
     # Omega's f: the identified model; or the simulator in a world of its own, since
     # f() resets MuJoCo's state to evaluate a step; or none.
     if cfg.omega_model == "simulator":
         omega_f = GimbalSystem(first)
     else:
         omega_f = identified_model(ref) if cfg.omega_model == "identified" else ref
-    observers = [build_estimator("kkl", ref if m.world == first else GimbalSystem(m.world),
+    observers = [build_estimator("kkl", ref if m.world == first else member_system(m.world),
                                  model=omega_f, checkpoint=m.checkpoint,
                                  omega=cfg.omega_model != "none") for m in members]
     if len(observers) == 1:

@@ -6,6 +6,8 @@ input.
 
 from __future__ import annotations
 
+import math
+
 import numpy as np
 
 from ..config import LinkConstants
@@ -39,17 +41,31 @@ class DropoutGate:
         self.reset()
 
     def reset(self) -> None:
-        self.held = np.zeros(2, dtype=int)
-        self.level = None
+        self._held = [0, 0]
+        self._level: list | None = None
+
+    @property
+    def held(self) -> np.ndarray:
+        """Steps each photodiode's current dropout has lasted [-]."""
+        return np.array(self._held)
+
+    @property
+    def level(self) -> np.ndarray | None:
+        """Recent level of each photodiode's accepted samples [W]."""
+        return None if self._level is None else np.array(self._level)
 
     def __call__(self, y: np.ndarray) -> np.ndarray:
-        y = np.asarray(y, dtype=float)
-        if self.level is None:
-            self.level = y.copy()
-        low = y < self.floor
-        start = low & (self.held == 0) & (self.level > 2 * self.floor)
-        drop = (start | (low & (self.held > 0))) & (self.held < self.max_steps)
-        self.held = np.where(drop, self.held + 1, 0)
-        a = self.smoothing
-        self.level = np.where(drop, self.level, (1 - a) * self.level + a * y)
-        return np.where(drop, np.nan, y)
+        # Plain floats: two photodiodes, and numpy's per-call cost dominated (11 us).
+        y = np.asarray(y, dtype=float).tolist()
+        if self._level is None:
+            self._level = list(y)
+        floor, a, out = self.floor, self.smoothing, []
+        for i, yi in enumerate(y):
+            held, level = self._held[i], self._level[i]
+            low = yi < floor
+            drop = low and (held > 0 or level > 2 * floor) and held < self.max_steps
+            self._held[i] = held + 1 if drop else 0
+            if not drop:
+                self._level[i] = (1 - a) * level + a * yi
+            out.append(math.nan if drop else yi)
+        return np.array(out)

@@ -208,7 +208,7 @@ class LinkWorld:
         """Distance along each unit direction to the first light-blocking geom [m];
         -1 where nothing is hit within ``max_length``. The gimbal's own body and the
         optics (geom group 3) are ignored."""
-        n = len(directions)
+        n = directions.size // 3
         if n not in self._ray_buffers:  # mj_multiRay wants outputs of exactly n entries
             self._ray_buffers[n] = (np.zeros(n, dtype=np.int32), np.zeros(n))
         geom, dist = self._ray_buffers[n]
