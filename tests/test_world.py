@@ -168,7 +168,8 @@ def test_missing_and_malformed_scene_files(tmp_path):
 
 @pytest.mark.parametrize("kwargs,name", [({"torque_limit": 0.0}, "torque_limit"),
                                          ({"torque_limit": -1.0}, "torque_limit"),
-                                         ({"timestep": 0.003}, "timestep")])
+                                         ({"timestep": 0.003}, "timestep"),
+                                         ({"integrator": "leapfrog"}, "integrator")])
 def test_bad_world_knobs_are_named(kwargs, name):
     with pytest.raises(ConfigError, match=name):
         WorldConfig(**kwargs)
@@ -195,6 +196,23 @@ def test_scene_file_loads_as_plain_mjcf():
 
     model = mujoco.MjModel.from_xml_path(str(SCENE))
     assert model.nbody == 5 and model.nsite >= 3 and model.ncam == 3
+
+
+def test_euler_world_follows_the_implicitfast_one():
+    """The cheaper integrator keeps the fluid damping stable and the motion the same to
+    a few mrad over 5 s of torque (docs/integrators.md compares whole tables)."""
+    import mujoco
+
+    phis = {}
+    for integ in ("implicitfast", "euler"):
+        w = LinkWorld(WorldConfig(integrator=integ))
+        assert w.model.opt.integrator == getattr(
+            mujoco.mjtIntegrator, f"mjINT_{integ.upper()}")
+        w.reset(0.1)
+        phis[integ] = simulate(w, IrradianceSensor(w), 5.0, torque=lambda t: 0.002).phi
+    assert np.all(np.isfinite(phis["euler"]))
+    assert np.max(np.abs(phis["euler"] - phis["implicitfast"])) < 5e-3
+    assert np.ptp(phis["euler"]) > 0.5  # the torque did move the gimbal
 
 
 def test_knobs_reach_the_compiled_model():

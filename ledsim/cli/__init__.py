@@ -72,7 +72,15 @@ def _choices(registry) -> dict:
 
 def _add_world_args(p, distance_help="link distance d [m]") -> None:
     p.add_argument("--distance", type=DISTANCE, default=0.085, help=distance_help)
+    _add_scene_args(p)
+
+
+def _add_scene_args(p) -> None:
+    from ..physics.scene import INTEGRATORS
+
     p.add_argument("--scene", help="MJCF scene file (default: the shipped led_link.xml)")
+    p.add_argument("--integrator", default="implicitfast", **_choices(INTEGRATORS),
+                   help="MuJoCo integrator (docs/physics.md compares them)")
 
 
 def _add_loop_args(p) -> None:
@@ -201,7 +209,6 @@ def build_parser() -> argparse.ArgumentParser:
                  "distances x noise scales x seeds), locally or on a Ray cluster")
     from ..loop.config import LOOP_ESTIMATORS, PHYSICS_SCENARIOS
     from ..loop.sweep import BACKENDS
-
     sw.add_argument("--estimator", action="append", choices=list(LOOP_ESTIMATORS),
                     metavar="{" + ",".join(LOOP_ESTIMATORS) + "}",
                     help="estimator (repeatable; default: kkl)")
@@ -221,7 +228,7 @@ def build_parser() -> argparse.ArgumentParser:
     sw.add_argument("--torque-limit", type=TORQUE_LIMIT, default=0.05, help="[N m]")
     sw.add_argument("--no-supervision", action="store_true",
                     help="no loss detection or reacquisition (see ledsim run)")
-    sw.add_argument("--scene", help="MJCF scene file (default: the shipped led_link.xml)")
+    _add_scene_args(sw)
     sw.add_argument("--backend", default="local", **_choices(BACKENDS),
                     help="local processes, or Ray (pip install 'ledsim[ray]')")
     sw.add_argument("--address", default=None,
@@ -230,8 +237,7 @@ def build_parser() -> argparse.ArgumentParser:
     sw.add_argument("--workers", type=WORKERS, default=2,
                     help="processes (local) or CPUs of a local Ray instance")
     sw.add_argument("--no-plot", action="store_true", help="skip summary.png")
-    sw.add_argument("--out", required=True,
-                    help="output folder; rerun the same command to resume")
+    sw.add_argument("--out", required=True, help="output folder; rerun to resume")
 
     dm = command("demo", "main job: closed-loop alignment with every estimator")
     dm.add_argument("--seeds", type=number(1, 1000, integer=True), default=2,

@@ -23,7 +23,8 @@ def _loop_config(args, **kw):
 
     cfg = RunConfig(scenario=args.scenario, estimator=args.estimator,
                     disturbances=tuple(args.disturbance), distance=args.distance,
-                    scene=args.scene, supervision=not args.no_supervision, **kw)
+                    scene=args.scene, supervision=not args.no_supervision,
+                    integrator=args.integrator, **kw)
     cfg.validate()
     return cfg
 
@@ -47,6 +48,7 @@ def simulate(args) -> int:
     constants = LinkConstants(distance=args.distance, dphi=math.radians(args.dphi))
     extra = {} if args.scene is None else {"xml": Path(args.scene)}
     world = LinkWorld(WorldConfig(constants=constants, torque_limit=args.torque_limit,
+                                  integrator=args.integrator,
                                   led_yaw=math.radians(args.led_yaw),
                                   led_lateral_offset=args.led_offset, **extra))
     world.reset(gimbal_angle=args.gimbal_angle)
@@ -193,7 +195,7 @@ def sweep(args) -> int:
         raise LedsimError("--address needs --backend ray")
     base = RunConfig(scenario=args.scenario, torque_limit=args.torque_limit,
                      particles=args.particles, seconds=args.seconds, scene=args.scene,
-                     supervision=not args.no_supervision)
+                     supervision=not args.no_supervision, integrator=args.integrator)
     grid = SweepGrid(estimators=args.estimator or ["kkl"],
                      disturbances=args.disturbance or ["none"],
                      distances=args.distance or [0.085],

@@ -62,6 +62,7 @@ class RunConfig:
         workers: processes.
         seconds: length of a run [s] (None: the scenario's).
         scene: MJCF scene file (None: the shipped one).
+        integrator: MuJoCo integrator of the world (``implicitfast`` or ``euler``, ...).
         supervision: watch the estimate, flag a lost link and reacquire it with a scan
             (:mod:`ledsim.loop.supervisor`); off: the estimator alone drives the motor.
     """
@@ -80,6 +81,7 @@ class RunConfig:
     seconds: float | None = None
     scene: str | None = None
     supervision: bool = True
+    integrator: str = "implicitfast"
 
     def validate(self) -> None:
         for flag, value, registry in (("scenario", self.scenario, PHYSICS_SCENARIOS),
@@ -113,4 +115,5 @@ class RunConfig:
         extra = {} if self.scene is None else {"xml": self.scene}
         d = self.distance if distance is None else distance
         return WorldConfig(constants=LinkConstants(distance=d),
-                           torque_limit=self.torque_limit, **extra)
+                           torque_limit=self.torque_limit, integrator=self.integrator,
+                           **extra)

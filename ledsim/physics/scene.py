@@ -27,6 +27,13 @@ class WorldError(LedsimError):
     """The scene cannot be built as asked (bad file, name, or geometry)."""
 
 
+#: MuJoCo integrators by their MJCF names.
+INTEGRATORS = {"implicitfast": mujoco.mjtIntegrator.mjINT_IMPLICITFAST,
+               "euler": mujoco.mjtIntegrator.mjINT_EULER,
+               "implicit": mujoco.mjtIntegrator.mjINT_IMPLICIT,
+               "rk4": mujoco.mjtIntegrator.mjINT_RK4}
+
+
 @dataclass(frozen=True)
 class WorldConfig:
     """Every knob of the MuJoCo world (SI units).
@@ -47,6 +54,8 @@ class WorldConfig:
         timestep: physics step [s]; ``constants.Te`` must be a multiple of it.
         n_rays: rays per photodiode over the LED aperture (1 = centre only).
         aperture_radius: radius of the LED's emitting aperture [m].
+        integrator: MuJoCo integrator, one of :data:`INTEGRATORS` (implicitfast treats
+            the fluid damping implicitly; euler is cheaper per step, see docs/physics.md).
     """
 
     constants: LinkConstants = field(default_factory=LinkConstants)
@@ -61,8 +70,12 @@ class WorldConfig:
     timestep: float = 0.002
     n_rays: int = 5
     aperture_radius: float = 0.003
+    integrator: str = "implicitfast"
 
     def __post_init__(self):
+        if self.integrator not in INTEGRATORS:
+            raise ConfigError(f"integrator={self.integrator!r} is not allowed: choose one "
+                              f"of {', '.join(INTEGRATORS)}")
         checks = [
             ("torque_limit", self.torque_limit, self.torque_limit > 0, "> 0 N m"),
             ("water_density", self.water_density, self.water_density >= 0, ">= 0 kg/m^3"),
@@ -122,6 +135,7 @@ def build_spec(config: WorldConfig) -> mujoco.MjSpec:
             raise WorldError(f"scene file {str(path)!r} has no {kind} named {name!r}")
     c = config.constants
     spec.option.timestep = config.timestep
+    spec.option.integrator = INTEGRATORS[config.integrator]
     spec.option.density = config.water_density
     spec.option.viscosity = config.water_viscosity
 

@@ -47,7 +47,14 @@ def _route_mujoco_warnings() -> None:
     """Send MuJoCo's warnings to Python logging instead of MUJOCO_LOG.TXT in the working
     folder (only if nobody installed a handler before)."""
     if mujoco.get_mju_user_warning() is None:
-        mujoco.set_mju_user_warning(lambda msg: _log.warning("MuJoCo: %s", msg.strip()))
+        mujoco.set_mju_user_warning(_on_mujoco_warning)
+
+
+def _on_mujoco_warning(msg: str) -> None:
+    # An unstable simulation becomes a WorldError (LinkWorld.step) that says it in one
+    # line: MuJoCo's own message is then only worth a debug record.
+    level = logging.DEBUG if "unstable" in msg else logging.WARNING
+    _log.log(level, "MuJoCo: %s", msg.strip())
 
 
 class LinkWorld:
@@ -117,12 +124,13 @@ class LinkWorld:
 
         Raises :class:`WorldError` if the physics became unstable (MuJoCo would otherwise
         reset the state silently and go on)."""
+        t0 = self.data.time  # MuJoCo's reset after an instability sets time back to 0
         mujoco.mj_step(self.model, self.data, nstep=n or self.config.substeps)
         warning = self.data.warning
         if warning[_UNSTABLE[0]].number or warning[_UNSTABLE[1]].number or \
                 warning[_UNSTABLE[2]].number:
-            raise WorldError(f"the physics became unstable at t = {self.time:.3f} s "
-                             "(forces or speeds out of range): reduce the disturbance")
+            raise WorldError(f"the physics became unstable after t = {t0:.3f} s (forces "
+                             "or speeds out of range): reduce the disturbance")
 
     def forward_kinematics(self) -> None:
         """Poses and velocities of every body and site from the current qpos, qvel and
