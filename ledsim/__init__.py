@@ -6,10 +6,17 @@ physics); shared: :mod:`ledsim.config` (constants), :mod:`ledsim.optics`,
 :mod:`ledsim.control`, :mod:`ledsim.scenario`, :mod:`ledsim.estimators`.
 """
 
-from .config import LinkConstants, ReceiverResponse
-from .errors import LedsimError
-from .paper.model import LEDLinkModel
+import importlib
 
 __version__ = "0.2.0"
 
-__all__ = ["LinkConstants", "ReceiverResponse", "LEDLinkModel", "LedsimError", "__version__"]
+# Imported on first use, so that the command line can pin BLAS threads before numpy loads.
+_LAZY = {"LinkConstants": ".config", "ReceiverResponse": ".config",
+         "LEDLinkModel": ".paper.model", "LedsimError": ".errors"}
+__all__ = [*_LAZY, "__version__"]
+
+
+def __getattr__(name: str):
+    if name in _LAZY:
+        return getattr(importlib.import_module(_LAZY[name], __name__), name)
+    raise AttributeError(f"module 'ledsim' has no attribute {name!r}")

@@ -232,3 +232,19 @@ def test_train_design_deep_trains_a_gradient_decoder_of_two_layers(tmp_path):
     obs = checkpoint.load(out, LEDLinkModel(LinkConstants()))
     assert len(obs.decoder_T_star.mid) == 1
     assert obs.training_metadata["training"]["finetune_epochs"] == 20
+
+
+@pytest.mark.parametrize("command,expected", [("run", "1"), ("sweep", "1"), ("train", "None")])
+def test_blas_threads_are_pinned_before_numpy_loads_except_for_training(command, expected):
+    import os
+    import subprocess
+    import sys
+
+    code = ("import os, sys; import ledsim.cli as c; assert 'numpy' not in sys.modules; "
+            f"c._pin_threads([{command!r}]); import numpy; "
+            "print(os.environ.get('OPENBLAS_NUM_THREADS'))")
+    env = {k: v for k, v in os.environ.items() if k not in
+           ("OMP_NUM_THREADS", "OPENBLAS_NUM_THREADS", "MKL_NUM_THREADS")}
+    out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True,
+                         env=env, check=True).stdout.strip()
+    assert out == expected

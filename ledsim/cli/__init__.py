@@ -15,6 +15,18 @@ import sys
 
 from observer.atomic import INTERRUPTED
 
+from .options import (  # noqa: F401 (re-exported)
+    DISTANCE,
+    DPHI_DEG,
+    PARTICLES,
+    SECONDS,
+    SEED,
+    SEEDS,
+    TORQUE_LIMIT,
+    WORKERS,
+    number,
+)
+
 EXIT_USAGE = 2
 CAMERAS = ("side", "overview", "chase")  # the shipped scene's cameras
 
@@ -32,38 +44,6 @@ class _Help(argparse.ArgumentDefaultsHelpFormatter):
         if action.default in (None, False, argparse.SUPPRESS) or action.required:
             return text
         return f"{text} (default: %(default)s)".strip()
-
-
-def number(lo: float, hi: float, unit: str = "", *, integer: bool = False,
-           lo_open: bool = False):
-    """An argparse type: a finite number in [lo, hi] (``lo_open``: (lo, hi]), so that
-    a non-finite, absurd or unphysical value is refused before any work, in one line."""
-    fmt = "{}" if integer else "{:g}"
-    allowed = f"{'(' if lo_open else '['}{fmt.format(lo)}, {fmt.format(hi)}] {unit}".rstrip()
-
-    def parse(text: str):
-        try:
-            value = int(text) if integer else float(text)
-        except ValueError:
-            kind = "an integer" if integer else "a number"
-            raise argparse.ArgumentTypeError(f"{text!r} is not {kind}") from None
-        if not math.isfinite(value):
-            raise argparse.ArgumentTypeError(f"{text!r} is not allowed: must be finite")
-        if not ((lo < value) if lo_open else (lo <= value)) or value > hi:
-            raise argparse.ArgumentTypeError(f"{text} is not allowed: must be in {allowed}")
-        return value
-
-    return parse
-
-
-DISTANCE = number(0.0, 5.0, "m", lo_open=True)
-SECONDS = number(0.0, 3600.0, "s", lo_open=True)
-SEED = number(0, 2**32 - 1, integer=True)
-SEEDS = number(1, 10_000, integer=True)
-PARTICLES = number(1, 1_000_000, integer=True)
-WORKERS = number(1, 64, integer=True)
-DPHI_DEG = number(-89.0, 89.0, "deg")
-TORQUE_LIMIT = number(0.0, 10.0, "N m", lo_open=True)
 
 
 def _choices(registry) -> dict:
@@ -263,9 +243,23 @@ def _on_sigint(signum, frame) -> None:
     raise KeyboardInterrupt
 
 
+#: BLAS/OpenMP thread variables pinned to 1 for every command but ``train``: the loop's
+#: matrices are 2x2, and worker processes (forked from this one) share the cores.
+THREAD_VARS = ("OMP_NUM_THREADS", "OPENBLAS_NUM_THREADS", "MKL_NUM_THREADS")
+
+
+def _pin_threads(argv: list[str]) -> None:
+    """One BLAS thread per process unless training or the user chose; only effective
+    before numpy is first imported (``import ledsim.cli`` does not import it)."""
+    if "train" not in argv[:1] and "numpy" not in sys.modules:
+        for var in THREAD_VARS:
+            os.environ.setdefault(var, "1")
+
+
 def main(argv: list[str] | None = None) -> int:
     argv = sys.argv[1:] if argv is None else list(argv)
     _gl_from_argv(argv)
+    _pin_threads([a for a in argv if not a.startswith("-")])
     from observer.errors import ObserverError
 
     from ..errors import LedsimError
