@@ -42,7 +42,8 @@ def test_same_seed_same_episode():
 
 def test_every_knob_is_a_constructor_argument():
     e = gym.make(ENV_ID, distance=0.1, noise_scale=2.0, torque_limit=0.02, frame_skip=10,
-                 disturbances=("current:speed=0.1",)).unwrapped
+                 disturbances=("current:speed=0.1",), integrator="euler").unwrapped
+    assert e.world.config.integrator == "euler"
     assert e.system.constants.distance == 0.1 and e.system.constants.Te == pytest.approx(0.02)
     assert e.world.config.torque_limit == 0.02 and e.metadata["render_fps"] == 50
     e.reset(seed=0)

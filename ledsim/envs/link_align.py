@@ -55,6 +55,9 @@ class LinkAlignEnv(gym.Env):
         phi0_range: initial misalignment drawn uniformly in +-phi0_range [rad].
         render_mode: None or ``"rgb_array"``.
         width, height, camera: rendered frame size [px] and camera name.
+        integrator: MuJoCo integrator (``implicitfast``, ``euler``, ...; see
+            docs/integrators.md).
+        scene: MJCF scene file (None: the shipped one).
     """
 
     metadata = {"render_modes": ["rgb_array"], "render_fps": 100}
@@ -62,13 +65,16 @@ class LinkAlignEnv(gym.Env):
     def __init__(self, distance: float = 0.085, noise_scale: float = 1.0,
                  disturbances: tuple[str, ...] = (), torque_limit: float = 0.05,
                  frame_skip: int = 5, phi0_range: float = 0.3, render_mode: str | None = None,
-                 width: int = 640, height: int = 480, camera: str = "side"):
+                 width: int = 640, height: int = 480, camera: str = "side",
+                 integrator: str = "implicitfast", scene: str | None = None):
         if render_mode not in (None, "rgb_array"):
             raise ValueError(f"render_mode={render_mode!r}: use None or 'rgb_array'")
         if int(frame_skip) < 1:
             raise ValueError(f"frame_skip={frame_skip!r}: must be >= 1")
         constants = LinkConstants(distance=distance, Te=0.002 * int(frame_skip))
-        self.system = GimbalSystem(WorldConfig(constants=constants, torque_limit=torque_limit))
+        extra = {} if scene is None else {"xml": scene}
+        self.system = GimbalSystem(WorldConfig(constants=constants, torque_limit=torque_limit,
+                                               integrator=integrator, **extra))
         self.world = self.system.world
         self.noise_scale = noise_scale
         self.disturbance_specs = tuple(disturbances)
