@@ -183,8 +183,9 @@ def plot_sweep(summary: list[dict], path: Path) -> Path:
         if log:
             ax.set_yscale("log")
     axes[0].legend(fontsize=8, ncol=len(estimators))
-    axes[1].set_xticks(x, [f"{d}\nd={r:g} m, noise x{n:g}" for d, r, n in combos],
-                       fontsize=7)
+    labels = [f"{d.replace(':', ':' + chr(10)).replace('+', '+' + chr(10))}\n"
+              f"d={r:g} m, noise x{n:g}" for d, r, n in combos]  # long specs wrap
+    axes[1].set_xticks(x, labels, fontsize=7)
     axes[0].set_title("sweep: mean and spread over seeds")
     fig.tight_layout()
     return _save(fig, path)
