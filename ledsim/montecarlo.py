@@ -11,6 +11,7 @@ parent (Linux ``PR_SET_PDEATHSIG``), so a killed ``ledsim run`` leaves no orphan
 from __future__ import annotations
 
 import ctypes
+import os
 import signal
 import sys
 from collections.abc import Callable, Sequence
@@ -21,9 +22,18 @@ from tqdm.auto import tqdm
 
 from .errors import LedsimError
 
-#: Threads of each Ray worker: one, so that N workers use N cores (set before numpy loads).
+#: One BLAS/OpenMP thread per process, so that N workers use N cores. Effective only
+#: when set before numpy loads (Ray: its runtime environment; the CLI, the scripts:
+#: :func:`pin_blas_threads` first thing).
 WORKER_ENV = {k: "1" for k in ("OMP_NUM_THREADS", "OPENBLAS_NUM_THREADS",
                                "MKL_NUM_THREADS")}
+
+
+def pin_blas_threads() -> None:
+    """Put :data:`WORKER_ENV` into ``os.environ``; a value the user set wins.
+    Importing this module does not import numpy."""
+    for var, value in WORKER_ENV.items():
+        os.environ.setdefault(var, value)
 T = TypeVar("T")
 R = TypeVar("R")
 
@@ -59,8 +69,7 @@ def run_jobs(fn: Callable[[T], R], jobs: Sequence[T], workers: int = 1, desc: st
         on_result: called in this process with ``(job, result)`` as each job finishes
             (in job order), e.g. to save it so that an interrupted run can resume.
     """
-    bar = dict(total=len(jobs), desc=desc, disable=not progress, leave=False,
-               file=sys.stderr)
+    bar = _bar_options(len(jobs), desc, progress)
     workers = min(workers, len(jobs))
     if workers <= 1:
         return _collect(jobs, (fn(j) for j in jobs), bar, on_result)
@@ -92,8 +101,7 @@ def run_jobs_ray(fn: Callable[[T], R], jobs: Sequence[T], workers: int = 2,
     try:
         remote = ray.remote(num_cpus=1, max_retries=2)(fn)
         pending = {remote.remote(job): k for k, job in enumerate(jobs)}
-        with tqdm(total=len(jobs), desc=desc, disable=not progress, leave=False,
-                  file=sys.stderr) as bar:
+        with tqdm(**_bar_options(len(jobs), desc, progress)) as bar:
             while pending:
                 ready, _ = ray.wait(list(pending), num_returns=1)
                 k = pending.pop(ready[0])
@@ -109,6 +117,11 @@ def run_jobs_ray(fn: Callable[[T], R], jobs: Sequence[T], workers: int = 2,
         if started:
             ray.shutdown()
     return [results[k] for k in range(len(jobs))]
+
+
+def _bar_options(total: int, desc: str, progress: bool) -> dict:
+    """tqdm options of every runner's progress bar (on stderr, gone when done)."""
+    return dict(total=total, desc=desc, disable=not progress, leave=False, file=sys.stderr)
 
 
 def _collect(jobs, stream, bar: dict, on_result) -> list:

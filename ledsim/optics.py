@@ -26,8 +26,14 @@ def receiver_response(phi, r: ReceiverResponse) -> np.ndarray:
 
 def receiver_response_at(phi: float, r: ReceiverResponse) -> float:
     """g(phi) for one angle [rad], in plain floats (the per-step paths; same formula)."""
+    _, _, e1, e2 = _response_terms(phi, r)
+    return e1 + e2
+
+
+def _response_terms(phi: float, r: ReceiverResponse) -> tuple[float, float, float, float]:
+    """(u1, u2, e1, e2) of g(phi) = e1 + e2, e_i = a_i exp(-u_i^2), for one angle."""
     u1, u2 = (phi - r.b1) / r.c1, (phi + r.b2) / r.c2
-    return r.a1 * math.exp(-u1 * u1) + r.a2 * math.exp(-u2 * u2)
+    return u1, u2, r.a1 * math.exp(-u1 * u1), r.a2 * math.exp(-u2 * u2)
 
 
 def receiver_response_derivative(phi, r: ReceiverResponse) -> np.ndarray:
@@ -48,6 +54,12 @@ def transmitter_gain(d, theta, c: LinkConstants) -> np.ndarray:
     """The transmitter part a exp(-b d) / d^2 * I~(theta) of eq. (pow-d-theta-phi) [W]."""
     d = np.asarray(d, dtype=float)
     return c.power_scale * np.exp(-c.attenuation * d) / d**2 * led_intensity(theta, c)
+
+
+def transmitter_gain_at(d: float, theta: float, c: LinkConstants) -> float:
+    """:func:`transmitter_gain` for one distance [m] and angle [rad], in plain floats."""
+    cos_t = max(math.cos(theta), 0.0)
+    return c.power_scale * math.exp(-c.attenuation * d) / d**2 * cos_t**c.lambertian_order
 
 
 def received_power(gain, incidence_angle, r: ReceiverResponse, visible=1.0) -> np.ndarray:
@@ -138,8 +150,7 @@ def pair_shape_inverse(powers, c: LinkConstants) -> tuple[float, float, float]:
 
 def _response_and_slope(phi: float, r: ReceiverResponse) -> tuple[float, float]:
     """(g(phi), dg/dphi) for one angle, in plain floats (the per-step paths)."""
-    u1, u2 = (phi - r.b1) / r.c1, (phi + r.b2) / r.c2
-    e1, e2 = r.a1 * math.exp(-u1 * u1), r.a2 * math.exp(-u2 * u2)
+    u1, u2, e1, e2 = _response_terms(phi, r)
     return e1 + e2, -2 * u1 / r.c1 * e1 - 2 * u2 / r.c2 * e2
 
 

@@ -189,7 +189,6 @@ class GainTracker:
         self.deadband_moving = deadband_moving
         self.max_variance = max_std**2
         self.alpha_powers = min(1.0, system.Te / tau_powers)
-        self.min_power = min_snr * np.asarray(system.measurement_noise_std, dtype=float)
         self._nominal_sigma = np.asarray(system.measurement_noise_std, dtype=float).tolist()
         self._min_snr = float(min_snr)
         self.set(ratio, variance=0.0)

@@ -13,10 +13,10 @@ from __future__ import annotations
 import argparse
 import os
 
+from ledsim.montecarlo import WORKER_ENV  # imports no numpy
+
 # Before numpy (and its BLAS) is imported: one thread, so "one core" means one core.
-os.environ["OMP_NUM_THREADS"] = "1"
-os.environ["OPENBLAS_NUM_THREADS"] = "1"
-os.environ["MKL_NUM_THREADS"] = "1"
+os.environ.update(WORKER_ENV)
 os.environ.setdefault("MUJOCO_GL", "osmesa")
 import json
 import platform
@@ -66,13 +66,14 @@ def batched_throughput(obs, n_traj=1024, n_steps=200, dtype=np.float32) -> float
     return n_traj * n_steps / best
 
 
-def world_speed(timestep: float, seconds: float = 20.0, repeats: int = 3) -> tuple[float, float]:
+def world_speed(timestep: float, seconds: float = 20.0, repeats: int = 3,
+                integrator: str = "implicitfast") -> tuple[float, float]:
     """(control steps per second, real-time factor) of physics + ray sensor, open loop."""
     from ledsim.physics.sensor import IrradianceSensor
     from ledsim.physics.simulation import simulate
     from ledsim.physics.world import LinkWorld, WorldConfig
 
-    world = LinkWorld(WorldConfig(timestep=timestep))
+    world = LinkWorld(WorldConfig(timestep=timestep, integrator=integrator))
     sensor = IrradianceSensor(world)
     best = np.inf
     for _ in range(repeats):
@@ -140,14 +141,15 @@ def rollout_speed(n_worlds: int, seconds: float = 5.0) -> float:
     return n_worlds * n_steps / substeps / best
 
 
-def closed_loop_speed(estimator: str) -> tuple[float, float]:
+def closed_loop_speed(estimator: str, integrator: str = "implicitfast") -> tuple[float, float]:
     """(real-time factor of the whole loop, estimator us per step), align scenario."""
     from ledsim.loop.closed_loop import run_once
     from ledsim.loop.config import RunConfig
 
     best = None
     for _ in range(2):
-        out = run_once(RunConfig(scenario="align", estimator=estimator), seed=0)
+        out = run_once(RunConfig(scenario="align", estimator=estimator,
+                                 integrator=integrator), seed=0)
         if best is None or out.realtime_factor > best.realtime_factor:
             best = out
     return best.realtime_factor, best.us_per_step

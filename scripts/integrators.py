@@ -14,8 +14,9 @@ from __future__ import annotations
 
 import os
 
-os.environ["OMP_NUM_THREADS"] = "1"  # before numpy: one core means one core
-os.environ["OPENBLAS_NUM_THREADS"] = "1"
+from ledsim.montecarlo import WORKER_ENV  # imports no numpy
+
+os.environ.update(WORKER_ENV)  # before numpy: one core means one core
 import argparse
 import json
 import sys
@@ -23,10 +24,9 @@ import time
 from pathlib import Path
 
 import numpy as np
+from bench import closed_loop_speed, world_speed  # scripts/ is sys.path[0]
 
 from ledsim.physics.scene import WorldConfig
-from ledsim.physics.sensor import IrradianceSensor
-from ledsim.physics.simulation import simulate
 from ledsim.physics.world import LinkWorld
 from observer.atomic import atomic_write_text
 
@@ -34,30 +34,16 @@ ROOT = Path(__file__).resolve().parent.parent
 NAMES = ("implicitfast", "euler")
 
 
-def step_cost(integrator: str, seconds: float = 10.0, repeats: int = 5) -> tuple[float, float]:
-    """(us per control step of physics + rays, us per mj_step substep), best of repeats."""
+def substep_cost(integrator: str, repeats: int = 5) -> float:
+    """us per ``mj_step`` substep, best of ``repeats`` runs of 1000."""
     world = LinkWorld(WorldConfig(integrator=integrator))
-    sensor = IrradianceSensor(world)
-    best_loop = best_sub = np.inf
+    best = np.inf
     for _ in range(repeats):
         world.reset(0.1)
         t0 = time.perf_counter()
-        simulate(world, sensor, seconds, torque=lambda t: 0.002)
-        best_loop = min(best_loop, (time.perf_counter() - t0) / (seconds / 0.01))
-        world.reset(0.1)
-        t0 = time.perf_counter()
         world.step(1000)
-        best_sub = min(best_sub, (time.perf_counter() - t0) / 1000)
-    return 1e6 * best_loop, 1e6 * best_sub
-
-
-def loop_cost(integrator: str, repeats: int = 3) -> float:
-    """us per control step of the supervised KKL closed loop (align scenario, 10 s)."""
-    from ledsim.loop.closed_loop import run_once
-    from ledsim.loop.config import RunConfig
-
-    cfg = RunConfig(estimator="kkl", integrator=integrator)
-    return min(1e4 / run_once(cfg, 0).realtime_factor for _ in range(repeats))
+        best = min(best, (time.perf_counter() - t0) / 1000)
+    return 1e6 * best
 
 
 #: The strongest disturbances the CLI accepts (ledsim/physics/disturbances.py RANGES).
@@ -95,8 +81,9 @@ def main() -> None:
     ap.add_argument("--out", default=str(ROOT / "docs" / "integrators.md"))
     args = ap.parse_args()
     tables = {n: load(n) for n in NAMES}
-    costs = {n: step_cost(n) for n in NAMES}
-    loops = {n: loop_cost(n) for n in NAMES}
+    # (us per control step open loop, us per substep); us per step of the KKL loop.
+    costs = {n: (1e6 / world_speed(0.002, integrator=n)[0], substep_cost(n)) for n in NAMES}
+    loops = {n: 1e4 / closed_loop_speed("kkl", n)[0] for n in NAMES}
     stable = {(n, d): survives(n, d) for n in NAMES for d in EXTREMES}
     a, b = (tables[n] for n in NAMES)
     lines = ["# implicitfast or Euler?", "",

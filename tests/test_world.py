@@ -272,3 +272,26 @@ def test_eye_only_geoms_change_neither_inertia_nor_light_nor_motion(tmp_path):
             w.step()
         traj.append((w.gimbal_angle, w.hull_yaw))
     np.testing.assert_allclose(traj[0], traj[1], rtol=0, atol=1e-12)
+
+
+def test_per_step_float_optics_match_the_array_formulas(world):
+    """The plain-float twins on the loop's hot path compute the same powers."""
+    from ledsim.optics import (
+        receiver_response,
+        receiver_response_at,
+        transmitter_gain,
+        transmitter_gain_at,
+    )
+
+    c = world.config.constants
+    for phi in np.linspace(-1.2, 1.2, 25):
+        assert receiver_response_at(float(phi), c.receiver) == pytest.approx(
+            float(receiver_response(phi, c.receiver)), rel=1e-14)
+    for d, theta in [(0.05, 0.0), (0.085, 0.3), (0.3, 1.4), (0.2, 2.0)]:
+        assert transmitter_gain_at(d, theta, c) == pytest.approx(
+            float(transmitter_gain(d, theta, c)), rel=1e-14, abs=0.0)
+    sensor = IrradianceSensor(world, noise=False)
+    reading = sensor.read(noise=False)
+    np.testing.assert_allclose(reading.power_clean, sensor.clean_power(
+        reading.distance, reading.emission_angle, reading.incidence_angle,
+        reading.visible_fraction), rtol=1e-14)

@@ -18,6 +18,7 @@ from observer.atomic import INTERRUPTED
 from .options import (  # noqa: F401 (re-exported)
     DISTANCE,
     DPHI_DEG,
+    NOISE_SCALE,
     PARTICLES,
     SECONDS,
     SEED,
@@ -154,7 +155,7 @@ def build_parser() -> argparse.ArgumentParser:
     rn = command("run", "closed loop in MuJoCo: estimator + controller + gimbal")
     _add_loop_args(rn)
     rn.add_argument("--torque-limit", type=TORQUE_LIMIT, default=0.05, help="[N m]")
-    rn.add_argument("--noise-scale", type=number(0.0, 100.0, lo_open=True), default=1.0,
+    rn.add_argument("--noise-scale", type=NOISE_SCALE, default=1.0,
                     help="multiplies the measurement-noise std")
     rn.add_argument("--seconds", type=SECONDS, default=None,
                     help="length of each run [s] (default: the scenario's, 10 s)")
@@ -197,7 +198,7 @@ def build_parser() -> argparse.ArgumentParser:
                     "joined by + (repeatable; default: none)")
     sw.add_argument("--distance", action="append", type=DISTANCE,
                     help="link distance d [m] (repeatable; default: 0.085)")
-    sw.add_argument("--noise-scale", action="append", type=number(0.0, 100.0, lo_open=True),
+    sw.add_argument("--noise-scale", action="append", type=NOISE_SCALE,
                     help="multiplies the measurement-noise std (repeatable; default: 1)")
     sw.add_argument("--seeds", type=SEEDS, default=2, help="runs per combination")
     sw.add_argument("--scenario", default="align", **_choices(PHYSICS_SCENARIOS),
@@ -243,17 +244,15 @@ def _on_sigint(signum, frame) -> None:
     raise KeyboardInterrupt
 
 
-#: BLAS/OpenMP thread variables pinned to 1 for every command but ``train``: the loop's
-#: matrices are 2x2, and worker processes (forked from this one) share the cores.
-THREAD_VARS = ("OMP_NUM_THREADS", "OPENBLAS_NUM_THREADS", "MKL_NUM_THREADS")
-
-
 def _pin_threads(argv: list[str]) -> None:
-    """One BLAS thread per process unless training or the user chose; only effective
-    before numpy is first imported (``import ledsim.cli`` does not import it)."""
+    """One BLAS thread per process for every command but ``train`` (the loop's matrices
+    are 2x2, and worker processes forked from this one share the cores), unless the user
+    chose; only effective before numpy is first imported (``import ledsim.cli`` does not
+    import it)."""
     if "train" not in argv[:1] and "numpy" not in sys.modules:
-        for var in THREAD_VARS:
-            os.environ.setdefault(var, "1")
+        from ..montecarlo import pin_blas_threads
+
+        pin_blas_threads()
 
 
 def main(argv: list[str] | None = None) -> int:

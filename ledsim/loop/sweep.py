@@ -21,19 +21,17 @@ import io
 import itertools
 import json
 import logging
-import math
 import re
 from collections.abc import Sequence
 from dataclasses import asdict, dataclass, replace
 from pathlib import Path
 
-import numpy as np
-
 from observer.atomic import atomic_write_text
-from observer.metrics import mean_and_spread
 
 from ..errors import LedsimError
+from ..results import to_jsonable
 from .config import RunConfig
+from .report import Stat
 
 log = logging.getLogger("ledsim")
 
@@ -147,15 +145,7 @@ def run_cell(job: tuple[RunConfig, Cell]) -> dict:
            "lost_share": m.lost_share, "detection_delay": m.detection_delay,
            "losses": len(m.link_events),
            "us_per_step": out.us_per_step, "realtime_factor": out.realtime_factor}
-    return {"version": __version__, "row": {k: _plain(v) for k, v in row.items()}}
-
-
-def _plain(v):
-    if isinstance(v, np.generic):
-        v = v.item()
-    if isinstance(v, float) and not math.isfinite(v):
-        return None
-    return v
+    return {"version": __version__, "row": to_jsonable(row)}
 
 
 class SweepStore:
@@ -223,10 +213,8 @@ def summarize(rows: list[dict]) -> list[dict]:
         s = dict(zip(keys, combo, strict=True), runs=len(rs))
         for m in ("rmse_steady_x1", "rmse_steady_x2", "availability", "recovery_time",
                   "lost_share"):
-            vals = np.array([r[m] for r in rs if r[m] is not None], dtype=float)
-            mean, spread = mean_and_spread(vals) if len(vals) else (None, None)
-            s[f"{m}_mean"] = None if mean is None else float(mean)
-            s[f"{m}_std"] = None if spread is None else float(spread)
+            stat = Stat.over(r[m] for r in rs)
+            s[f"{m}_mean"], s[f"{m}_std"] = stat.mean, stat.std
         out.append(s)
     return out
 

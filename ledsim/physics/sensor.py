@@ -20,7 +20,12 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from ..optics import received_power, receiver_response_at, transmitter_gain
+from ..optics import (
+    received_power,
+    receiver_response_at,
+    transmitter_gain,
+    transmitter_gain_at,
+)
 from .world import LinkWorld, WorldError
 
 
@@ -149,9 +154,7 @@ class IrradianceSensor:
     def _clean_power_at(self, d: float, theta: float, phi: float, vis: float) -> float:
         """:meth:`clean_power` of one photodiode in plain floats (the per-step path)."""
         c = self.constants
-        cos_t = max(math.cos(theta), 0.0)
-        gain = c.power_scale * math.exp(-c.attenuation * d) / d**2 * cos_t**c.lambertian_order
-        return vis * gain * receiver_response_at(phi, c.receiver)
+        return vis * transmitter_gain_at(d, theta, c) * receiver_response_at(phi, c.receiver)
 
     def read(self, noise: bool = True) -> SensorReading:
         """Sample both photodiodes at the current MjData state."""
