@@ -13,6 +13,7 @@ from __future__ import annotations
 import ctypes
 import os
 import signal
+import socket
 import sys
 from collections.abc import Callable, Sequence
 from concurrent.futures import ProcessPoolExecutor
@@ -93,9 +94,15 @@ def run_jobs_ray(fn: Callable[[T], R], jobs: Sequence[T], workers: int = 2,
         raise LedsimError("--backend ray needs Ray: pip install 'ledsim[ray]'") from None
     started = not ray.is_initialized()
     if started:
+        _check_reachable(address)
         kw = dict(num_cpus=workers) if address is None else {}
-        ray.init(address=address, include_dashboard=False, log_to_driver=False,
-                 configure_logging=False, runtime_env={"env_vars": WORKER_ENV}, **kw)
+        try:
+            ray.init(address=address, include_dashboard=False, log_to_driver=False,
+                     configure_logging=False, runtime_env={"env_vars": WORKER_ENV}, **kw)
+        except (ConnectionError, RuntimeError, ValueError) as exc:
+            first = (str(exc).strip().splitlines() or [type(exc).__name__])[0]
+            raise LedsimError(f"--address {address!r}: no Ray cluster to join ({first})") \
+                from None
     pending: dict = {}
     results: dict[int, R] = {}
     try:
@@ -117,6 +124,22 @@ def run_jobs_ray(fn: Callable[[T], R], jobs: Sequence[T], workers: int = 2,
         if started:
             ray.shutdown()
     return [results[k] for k in range(len(jobs))]
+
+
+def _check_reachable(address: str | None, timeout: float = 5.0) -> None:
+    """Refuse at once a ``HOST:PORT`` (or ``ray://HOST:PORT``) that accepts no connection:
+    Ray itself retries for minutes before it gives up."""
+    if address is None or address == "auto":
+        return
+    host, _, port = address.removeprefix("ray://").rpartition(":")
+    if not host or not port.isdigit():
+        raise LedsimError(f"--address {address!r} is not allowed: use auto, HOST:PORT or "
+                          "ray://HOST:PORT")
+    try:
+        socket.create_connection((host, int(port)), timeout=timeout).close()
+    except OSError as exc:
+        raise LedsimError(f"--address {address!r}: cannot connect ({exc.strerror or exc})") \
+            from None
 
 
 def _bar_options(total: int, desc: str, progress: bool) -> dict:

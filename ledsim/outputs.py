@@ -14,16 +14,30 @@ from observer.atomic import check_interrupt
 from .errors import LedsimError
 
 
+def _can_create_in(folder: Path) -> bool:
+    """Whether an entry can really be made in ``folder``: permission bits are not enough
+    (root passes ``os.access`` on ``/proc`` and read-only mounts). Leaves nothing."""
+    if not folder.is_dir() or not os.access(folder, os.W_OK | os.X_OK):
+        return False
+    try:
+        os.rmdir(tempfile.mkdtemp(dir=folder, prefix=".ledsim-probe."))
+    except OSError:
+        return False
+    return True
+
+
 def check_out_dir(path: str | Path, flag: str = "--out") -> Path:
     """Refuse, before any work, a folder that could not be written: an existing file, or
-    a path whose nearest existing parent is not a writable folder. Creates nothing."""
+    a path whose nearest existing parent is not a folder we can create entries in.
+    Leaves nothing behind."""
     out = Path(path)
     if out.exists() and not out.is_dir():
         raise LedsimError(f"{flag} {str(path)!r} exists and is not a folder")
     probe = out
     while not probe.exists():
         probe = probe.parent
-    if not probe.is_dir() or not os.access(probe, os.W_OK | os.X_OK):
+    # The outputs are built beside ``out`` (output_folder), so its parent must take them.
+    if not _can_create_in(probe) or (probe == out and not _can_create_in(out.parent)):
         raise LedsimError(f"{flag} {str(path)!r} cannot be written: {str(probe)!r} is not a "
                           "writable folder")
     return out
@@ -37,7 +51,7 @@ def check_out_file(path: str | Path, suffix: str, flag: str = "--out") -> Path:
     if out.suffix.lower() != suffix:
         raise LedsimError(f"{flag} {str(path)!r}: the file must end in {suffix}")
     parent = out.parent
-    if not parent.is_dir() or not os.access(parent, os.W_OK):
+    if not _can_create_in(parent):
         raise LedsimError(f"{flag} {str(path)!r}: folder {str(parent)!r} does not exist or is not "
                           "writable")
     return out

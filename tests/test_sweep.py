@@ -96,8 +96,18 @@ def test_ray_backend_gives_the_same_rows_as_local(tmp_path):
     (["--disturbance", "occlusion:start=30,duration=1"], "start"),
     (["--address", "auto"], "--address needs --backend ray"),
     (["--seeds", "0"], "--seeds: 0 is not allowed"),
+    (["--backend", "ray", "--address", "junk"], "HOST:PORT"),
+    (["--backend", "ray", "--address", "127.0.0.1:1"], "cannot connect"),
 ])
 def test_sweep_bad_input_is_one_line(tmp_path, args, needle):
     out = tmp_path / "o"
     assert_user_error(run_cli("sweep", *args, "--out", str(out)), needle)
     assert not out.exists()
+
+
+@pytest.mark.parametrize("command", [["sweep"], ["run", "--seeds", "1", "--seconds", "1"],
+                                     ["demo", "--no-video"]])
+def test_an_output_folder_that_cannot_be_created_is_refused_before_any_work(command):
+    # root passes os.access on /proc, so the check must really try to create an entry
+    r = run_cli(*command, "--out", "/proc/ledsim-out")
+    assert_user_error(r, "not a writable folder")
