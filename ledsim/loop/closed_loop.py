@@ -78,6 +78,40 @@ def achievable_power(res, c) -> np.ndarray:
     return transmitter_gain(res.distance[:, 0], res.emission_angle[:, 0], c) * g_max
 
 
+def make_supervisor(cfg: RunConfig, system: GimbalSystem, estimator, estimator_system,
+                    reacquire: bool) -> LinkSupervisor:
+    """The supervisor of one run: its gain prior is the configured distance's over the
+    estimator model's, and its noise prior the noise in the model's gain (for a bank)."""
+    prior = peak_power(system.constants) / peak_power(estimator_system.constants)
+    return LinkSupervisor(estimator, system.constants, system.inertia,
+                          warmup=cfg.scenario_spec.warmup, reacquire=reacquire,
+                          gain_ratio=prior, noise_ratio=cfg.noise_scale / prior)
+
+
+def hold_torque(inertia: float, q, qdot, q_hold) -> float | np.ndarray:
+    """Motor torque [N m] of the warm-up: while the estimator converges, the motor only
+    holds its own encoder angle ``q_hold`` [rad] (PD, :data:`HOLD_GAINS`)."""
+    return -HOLD_GAINS[0] * inertia * (q - q_hold) - HOLD_GAINS[1] * inertia * qdot
+
+
+def outcome(res, xhat: np.ndarray, flags: np.ndarray, cfg: RunConfig, constants,
+            disturbances, supervised: bool, spent: float, wall: float,
+            keep_trace: bool) -> RunOutcome:
+    """A run's :class:`RunOutcome` from its simulation result, its estimates, its
+    (lost, acquiring) flags per step, and the seconds spent controlling and in all."""
+    events = [d for d in disturbances if d.event_end is not None]
+    flags = flags.reshape(-1, 2)
+    metrics = run_metrics(res.x, xhat, res.power_clean, cfg.scenario_spec.steady_from,
+                          constants, events[0].event_end if events else None,
+                          lost=flags[:, 0] if supervised else None,
+                          event_start=events[0].start if events else None,
+                          power_max=achievable_power(res, constants))
+    trace = Trace(res.t, res.x, xhat, res.power, res.power_clean, res.torque,
+                  res.occluded, flags[:, 0], flags[:, 1]) if keep_trace else None
+    return RunOutcome(metrics, 1e6 * spent / len(res.t),
+                      res.t[-1] / wall if len(res.t) else 0.0, trace)
+
+
 class ClosedLoop:
     """One closed-loop run of ``cfg`` with seed ``seed``.
 
@@ -113,14 +147,8 @@ class ClosedLoop:
         self.q_hold = self.world.gimbal_angle
         self.supervisor = None
         if self.estimator is not None and cfg.supervision:
-            # Prior of the gain: the configured distance's over the estimator model's; and
-            # of the noise in the model's gain, for a bank of observers.
-            prior = peak_power(constants) / peak_power(self.estimator_system.constants)
-            noise = cfg.noise_scale / prior
-            self.supervisor = LinkSupervisor(self.estimator, constants, self.system.inertia,
-                                             warmup=self.scenario.warmup,
-                                             reacquire=self.law.tracks_beam,
-                                             gain_ratio=prior, noise_ratio=noise)
+            self.supervisor = make_supervisor(cfg, self.system, self.estimator,
+                                              self.estimator_system, self.law.tracks_beam)
         self.xhats: list[np.ndarray] = []
         self.flags: list[tuple[bool, bool]] = []  # (lost, acquiring) per step
         self.spent = 0.0  # s in the estimator and the law
@@ -158,10 +186,8 @@ class ClosedLoop:
         if scan_torque is not None:
             return scan_torque
         if warming_up:
-            # While the estimator converges, the motor only holds its own encoder angle.
-            inertia = self.system.inertia
-            return (-HOLD_GAINS[0] * inertia * (w.gimbal_angle - self.q_hold)
-                    - HOLD_GAINS[1] * inertia * w.gimbal_rate)
+            return hold_torque(self.system.inertia, w.gimbal_angle, w.gimbal_rate,
+                               self.q_hold)
         return float(self.system.torque_for(u))
 
     def run(self, keep_trace: bool = False, progress: bool = False) -> RunOutcome:
@@ -170,19 +196,9 @@ class ClosedLoop:
                        disturbances=self.disturbances, controller=self.control,
                        progress=progress)
         wall = time.perf_counter() - t0
-        xhat = np.array(self.xhats)
-        events = [d for d in self.disturbances if d.event_end is not None]
-        flags = np.array(self.flags, dtype=bool).reshape(-1, 2)
-        metrics = run_metrics(res.x, xhat, res.power_clean, self.scenario.steady_from,
-                              self.system.constants,
-                              events[0].event_end if events else None,
-                              lost=flags[:, 0] if self.supervisor is not None else None,
-                              event_start=events[0].start if events else None,
-                              power_max=achievable_power(res, self.system.constants))
-        trace = Trace(res.t, res.x, xhat, res.power, res.power_clean, res.torque,
-                      res.occluded, flags[:, 0], flags[:, 1]) if keep_trace else None
-        return RunOutcome(metrics, 1e6 * self.spent / len(res.t),
-                          res.t[-1] / wall if len(res.t) else 0.0, trace)
+        return outcome(res, np.array(self.xhats), np.array(self.flags, dtype=bool),
+                       self.cfg, self.system.constants, self.disturbances,
+                       self.supervisor is not None, self.spent, wall, keep_trace)
 
 
 def run_once(cfg: RunConfig, seed: int, keep_trace: bool = False, on_step=None,

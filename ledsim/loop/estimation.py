@@ -116,12 +116,14 @@ def loop_estimator(cfg: RunConfig, system: GimbalSystem, model: IdentifiedGimbal
     members = kkl_members(cfg)
     first = members[0].world
     ref = system if first == system.config else member_system(first)
-    # Omega's f: the identified model; or the simulator in a world of its own, since
-    # f() resets MuJoCo's state to evaluate a step; or none.
+    # The KKL's model (Omega's f, and the h that fills missing samples and that the
+    # supervisor checks): the identified model; or the simulator in a world of its own,
+    # since its f and h reset MuJoCo's state to evaluate a step. Never the run's own
+    # world: without Omega ("none") the identified model still supplies h.
     if cfg.omega_model == "simulator":
         omega_f = GimbalSystem(first)
     else:
-        omega_f = identified_model(ref) if cfg.omega_model == "identified" else ref
+        omega_f = identified_model(ref)
     observers = [build_estimator("kkl", ref if m.world == first else member_system(m.world),
                                  model=omega_f, checkpoint=m.checkpoint,
                                  omega=cfg.omega_model != "none") for m in members]

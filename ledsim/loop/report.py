@@ -13,7 +13,8 @@ from observer.metrics import mean_and_spread
 
 from ..montecarlo import run_jobs
 from ..results import DictAccess, write_json
-from .closed_loop import RunOutcome, Trace, check_checkpoint, run_once
+from .batched import run_batch
+from .closed_loop import RunOutcome, Trace, check_checkpoint
 from .config import RunConfig
 
 
@@ -93,17 +94,23 @@ def summarize(cfg: RunConfig, outs: list[RunOutcome]) -> RunSummary:
         realtime_factor=stat(lambda o: o.realtime_factor))
 
 
-def _job(args) -> RunOutcome:
-    cfg, seed, keep = args
-    return run_once(cfg, seed, keep)
+def _job(args) -> list[RunOutcome]:
+    cfg, seeds = args
+    return run_batch(cfg, seeds, keep_trace=[s == 0 for s in seeds])
 
 
 def run_many(cfg: RunConfig, progress: bool = True) -> tuple[RunSummary, Trace]:
-    """Monte-Carlo over seeds 0..cfg.seeds-1; returns (summary, trace of seed 0)."""
+    """Monte-Carlo over seeds 0..cfg.seeds-1; returns (summary, trace of seed 0).
+
+    The seeds are split into one batch per worker, each run by the batched loop
+    (:mod:`ledsim.loop.batched`: every seed's numbers are the single run's)."""
     cfg.validate()
     check_checkpoint(cfg)
-    jobs = [(cfg, seed, seed == 0) for seed in range(cfg.seeds)]
-    outs = run_jobs(_job, jobs, cfg.workers, f"{cfg.scenario}/{cfg.estimator}", progress)
+    chunks = np.array_split(np.arange(cfg.seeds), max(1, min(cfg.workers, cfg.seeds)))
+    jobs = [(cfg, [int(s) for s in c]) for c in chunks]
+    outs = [o for batch in run_jobs(_job, jobs, cfg.workers,
+                                    f"{cfg.scenario}/{cfg.estimator}", progress)
+            for o in batch]
     return summarize(cfg, outs), outs[0].trace
 
 

@@ -40,6 +40,10 @@ class Disturbance:
     def apply(self, world: LinkWorld, t: float) -> None:
         raise NotImplementedError
 
+    #: It changes the world's model (not only its state), so worlds that run it side by
+    #: side cannot share one compiled model.
+    changes_model = False
+
     @property
     def event_end(self) -> float | None:
         """Time [s] at which a transient event (an occlusion) ends, after which the loop
@@ -87,6 +91,8 @@ class WaterCurrent(Disturbance):
         hold: 1 = station keeping on, 0 = drift with the water.
         seed: seed of the gusts.
     """
+
+    changes_model = True  # the medium velocity is a model option
 
     speed: float = 0.2
     heading: float = math.pi / 2

@@ -51,8 +51,7 @@ def _route_mujoco_warnings() -> None:
 
 
 def _on_mujoco_warning(msg: str) -> None:
-    # An unstable simulation becomes a WorldError (LinkWorld.step) that says it in one
-    # line: MuJoCo's own message is then only worth a debug record.
+    # An unstable simulation becomes a one-line WorldError; MuJoCo's message: debug.
     level = logging.DEBUG if "unstable" in msg else logging.WARNING
     _log.log(level, "MuJoCo: %s", msg.strip())
 
@@ -60,15 +59,20 @@ def _on_mujoco_warning(msg: str) -> None:
 class LinkWorld:
     """The compiled scene plus named accessors; see the module docstring."""
 
-    def __init__(self, config: WorldConfig | None = None):
+    def __init__(self, config: WorldConfig | None = None, *,
+                 share_model_of: LinkWorld | None = None):
         _route_mujoco_warnings()
-        self.config = config or WorldConfig()
-        self.spec = build_spec(self.config)
-        try:
-            self.model = self.spec.compile()
-        except Exception as exc:
-            raise WorldError(f"scene does not compile: {str(exc).strip().splitlines()[0]}") \
-                from None
+        if share_model_of is not None:  # a batch's worlds: one model, each its own data
+            self.config, self.spec = share_model_of.config, share_model_of.spec
+            self.model = share_model_of.model
+        else:
+            self.config = config or WorldConfig()
+            self.spec = build_spec(self.config)
+            try:
+                self.model = self.spec.compile()
+            except Exception as e:
+                raise WorldError(f"scene does not compile: {str(e).strip().splitlines()[0]}")\
+                    from None
         self.data = mujoco.MjData(self.model)
         m = self.model
         self._auv = m.body("auv").id
@@ -82,7 +86,8 @@ class LinkWorld:
         self._hinge_dof = hinge.dofadr[0]
         self._motor = m.actuator("gimbal_motor").id
         self._hull_dof = m.jnt_dofadr[m.body_jntadr[self._auv]]  # the free joint's first dof
-        self._set_hull_buoyancy()
+        if share_model_of is None:
+            self._set_hull_buoyancy()
         self.transmitter_home = self.data.mocap_pos[self._tx_mocap].copy()
         self.occluder_home = self.data.mocap_pos[self._occluder_mocap].copy()
         self.occluder_half_size = float(m.geom("occluder_plate").size[2])  # m
@@ -126,9 +131,11 @@ class LinkWorld:
         reset the state silently and go on)."""
         t0 = self.data.time  # MuJoCo's reset after an instability sets time back to 0
         mujoco.mj_step(self.model, self.data, nstep=n or self.config.substeps)
-        warning = self.data.warning
-        if warning[_UNSTABLE[0]].number or warning[_UNSTABLE[1]].number or \
-                warning[_UNSTABLE[2]].number:
+        self.check_stable(t0)
+
+    def check_stable(self, t0: float) -> None:
+        """:class:`WorldError` if MuJoCo flagged an unstable step (begun at ``t0`` [s])."""
+        if any(self.data.warning[w].number for w in _UNSTABLE):
             raise WorldError(f"the physics became unstable after t = {t0:.3f} s (forces "
                              "or speeds out of range): reduce the disturbance")
 

@@ -1,0 +1,200 @@
+"""N copies of the world stepped together.
+
+:class:`WorldBatch` holds one :class:`LinkWorld` per run, each with its own ``MjData``
+(and one shared ``MjModel`` unless a disturbance changes the model: a water current sets
+its medium velocity). One control period of every world is a single call: set the motor
+torques, ``mj_step`` through the substeps, apply each world's disturbances for the next
+step and update its kinematics. MuJoCo releases the GIL while it steps, so the worlds are
+split over ``threads`` threads. The poses the sensor needs
+(:mod:`ledsim.physics.batch_sensor`) are then stacked into (N, ...) arrays.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Sequence
+from concurrent.futures import ThreadPoolExecutor
+
+import mujoco
+import numpy as np
+
+from .world import RAY_GROUPS, LinkWorld
+
+
+class WorldBatch:
+    """N worlds advanced one control period at a time.
+
+    Args:
+        worlds: the worlds, each already reset to its initial state.
+        disturbances: per world, its (already reset) disturbances.
+        threads: threads that step the worlds (1: in the calling thread).
+    """
+
+    def __init__(self, worlds: Sequence[LinkWorld], disturbances: Sequence[Sequence],
+                 threads: int = 1):
+        if len(worlds) != len(disturbances) or not worlds:
+            raise ValueError("one list of disturbances per world, and at least one world")
+        self.worlds = list(worlds)
+        self.disturbances = [list(d) for d in disturbances]
+        n = len(self.worlds)
+        w0 = self.worlds[0]
+        m = w0.model
+        self.Te = w0.config.constants.Te
+        self._sites = np.array([w0._pd[0], w0._pd[1], w0._led])
+        self._gimbal = w0._gimbal
+        self._root = int(m.body_rootid[w0._gimbal])
+        # Light-blocking geoms that move (static ones are checked once, below).
+        blocking = (m.geom_group < 3) & (m.geom_bodyid != w0._gimbal) & \
+            (RAY_GROUPS[np.minimum(m.geom_group, 5)] > 0)
+        static = m.body_weldid[m.geom_bodyid] == 0
+        self.moving_geoms = np.flatnonzero(blocking & ~static)
+        self.static_geoms = np.flatnonzero(blocking & static)
+        self.rbound = m.geom_rbound[self.moving_geoms].copy()
+        # Views into each world's MjData (its arrays never move), read every step.
+        self._views = [self._world_views(w) for w in self.worlds]
+        self._all_sites = m.nsite == 3 and list(self._sites) == [0, 1, 2]
+        self._substeps = w0.config.substeps
+        self.site_pos = np.empty((n, 3, 3))  # pd1, pd2, LED
+        self.site_mat = np.empty((n, 3, 9))
+        self.gimbal_mat = np.empty((n, 9))
+        self.gimbal_cvel = np.empty((n, 6))
+        self.root_com = np.empty((n, 3))
+        self._qpos_hinge = np.empty((n, 1))
+        self._qvel_hinge = np.empty((n, 1))
+        self.hull_pos = np.empty((n, 3))
+        self.geom_xpos = np.empty((n, m.ngeom, 3))
+        self.transmitter_velocity = np.empty((n, 3))
+        self.applied = np.zeros(n)
+        self.threads = max(1, min(int(threads), n))
+        bounds = np.linspace(0, n, self.threads + 1).round().astype(int)
+        self._chunks = [range(a, b) for a, b in zip(bounds[:-1], bounds[1:], strict=True)]
+        self._pool = ThreadPoolExecutor(self.threads) if self.threads > 1 else None
+        self.time = w0.time
+        self._gathers = self._gather_plan()
+        for i in range(n):
+            self._prepare(i, self.time)
+        self._gather()
+
+    def _world_views(self, w: LinkWorld) -> tuple:
+        d = w.data
+        return w, d, d.ctrl[w._motor:w._motor + 1], d.xfrc_applied[w._auv]
+
+    def _gather_plan(self) -> list[tuple[np.ndarray, list]]:
+        """(output array, one view per world) of every quantity read each step."""
+        ws = self.worlds
+        ds = [w.data for w in ws]
+        if self._all_sites:
+            sites = [(self.site_pos, [d.site_xpos for d in ds]),
+                     (self.site_mat, [d.site_xmat for d in ds])]
+        else:
+            n, ns = len(ws), ws[0].model.nsite
+            self._site_xpos_all = np.empty((n, ns, 3))
+            self._site_xmat_all = np.empty((n, ns, 9))
+            sites = [(self._site_xpos_all, [d.site_xpos for d in ds]),
+                     (self._site_xmat_all, [d.site_xmat for d in ds])]
+        g, r = self._gimbal, self._root
+        return sites + [
+            (self.gimbal_mat, [d.xmat[g] for d in ds]),
+            (self.gimbal_cvel, [d.cvel[g] for d in ds]),
+            (self.root_com, [d.subtree_com[r] for d in ds]),
+            (self._qpos_hinge, [d.qpos[w._hinge_qpos:w._hinge_qpos + 1]
+                                for w, d in zip(ws, ds, strict=True)]),
+            (self._qvel_hinge, [d.qvel[w._hinge_dof:w._hinge_dof + 1]
+                                for w, d in zip(ws, ds, strict=True)]),
+            (self.hull_pos, [d.xpos[w._auv] for w, d in zip(ws, ds, strict=True)]),
+            (self.geom_xpos, [d.geom_xpos for d in ds]),
+            (self.transmitter_velocity, [w.transmitter_velocity for w in ws])]
+
+    @property
+    def qpos_hinge(self) -> np.ndarray:
+        """Gimbal hinge angle of each world [rad], (N,)."""
+        return self._qpos_hinge[:, 0]
+
+    @property
+    def qvel_hinge(self) -> np.ndarray:
+        """Gimbal hinge rate of each world [rad/s], (N,)."""
+        return self._qvel_hinge[:, 0]
+
+    def close(self) -> None:
+        if self._pool is not None:
+            self._pool.shutdown()
+            self._pool = None
+
+    def __enter__(self) -> WorldBatch:
+        return self
+
+    def __exit__(self, *exc) -> None:
+        self.close()
+
+    def _prepare(self, i: int, t: float) -> None:
+        """Start of step t in world i: disturbances act, kinematics, poses copied out
+        (the order of :func:`ledsim.physics.simulation.simulate`; LinkWorld's methods
+        inlined on cached views, since this runs N times per step)."""
+        w, d, _, xfrc = self._views[i]
+        m = w.model
+        xfrc.fill(0.0)  # clear_hull_wrench
+        for dist in self.disturbances[i]:
+            dist.apply(w, t)
+        mujoco.mj_kinematics(m, d)  # forward_kinematics
+        mujoco.mj_comPos(m, d)
+        mujoco.mj_comVel(m, d)
+
+    def _gather(self) -> None:
+        """Copy every world's poses into the (N, ...) arrays (one stack per quantity:
+        cheaper than N row copies)."""
+        for out, views in self._gathers:
+            np.stack(views, out=out)
+        if not self._all_sites:
+            self.site_pos = self._site_xpos_all[:, self._sites]
+            self.site_mat = self._site_xmat_all[:, self._sites]
+
+    def _advance(self, chunk: range, torques: list, t_next: float) -> None:
+        views, nstep = self._views, self._substeps
+        for i in chunk:
+            w, d, ctrl = views[i][:3]
+            ctrl[0] = torques[i]
+            t0 = d.time
+            mujoco.mj_step(w.model, d, nstep)
+            if d.time <= t0:  # MuJoCo reset the data: the physics became unstable
+                w.check_stable(t0)
+            self._prepare(i, t_next)
+
+    def step(self, torques: np.ndarray, t_next: float) -> None:
+        """Command the motor torques [N m] (clipped at the limit; ``applied`` holds what
+        was applied), advance every world by Te, and prepare step ``t_next`` [s]."""
+        lim = self.worlds[0].config.torque_limit
+        self.applied = np.clip(np.asarray(torques, dtype=float), -lim, lim)
+        torques = self.applied.tolist()
+        if self._pool is None:
+            self._advance(self._chunks[0], torques, t_next)
+        else:
+            for f in [self._pool.submit(self._advance, c, torques, t_next)
+                      for c in self._chunks]:
+                f.result()
+        self._gather()
+        self.time = t_next
+
+    @property
+    def hinge_axis(self) -> np.ndarray:
+        """The gimbal's rotation axis in each world, (N, 3)."""
+        return self.gimbal_mat[:, 2::3]
+
+    @property
+    def geom_pos(self) -> np.ndarray:
+        """Centres of the moving light-blocking geoms, (N, G, 3) [m]."""
+        return self.geom_xpos[:, self.moving_geoms]
+
+    @property
+    def photodiode_normal(self) -> np.ndarray:
+        """Unit normals of both photodiodes, (N, 2, 3)."""
+        return self.site_mat[:, :2, 2::3]
+
+    def photodiode_velocity0(self) -> tuple[np.ndarray, np.ndarray]:
+        """(angular, linear) velocity of photodiode 1, each (N, 3), as
+        ``mj_objectVelocity`` computes it (the body's com-based velocity moved to the
+        site)."""
+        ang, lin = self.gimbal_cvel[:, :3], self.gimbal_cvel[:, 3:]
+        dif = self.site_pos[:, 0] - self.root_com
+        cros = np.stack([dif[:, 1] * ang[:, 2] - dif[:, 2] * ang[:, 1],
+                         dif[:, 2] * ang[:, 0] - dif[:, 0] * ang[:, 2],
+                         dif[:, 0] * ang[:, 1] - dif[:, 1] * ang[:, 0]], axis=-1)
+        return ang, lin - cros

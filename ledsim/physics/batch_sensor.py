@@ -1,0 +1,184 @@
+"""The sensor of every world of a :class:`~ledsim.physics.batch.WorldBatch` in one pass.
+
+It stays ray-based where it matters: a light-blocking geom (groups 0-2, not the gimbal)
+can only stop a ray from a photodiode to the LED aperture if its bounding sphere comes
+within reach of that segment. Where none does, the line of sight is provably clear and
+the visible fraction is 1; only the (world, photodiode) pairs with a geom that close cast
+their rays (``mj_multiRay``, through the world's own sensor, exactly as a single run
+does).
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Sequence
+from dataclasses import dataclass
+
+import mujoco
+import numpy as np
+
+from ..optics import received_power, transmitter_gain
+from .batch import WorldBatch
+from .sensor import IrradianceSensor
+
+
+@dataclass
+class BatchReading:
+    """One sample of N sensors; arrays have a leading axis of N worlds.
+
+    Attributes:
+        power, power_clean: photodiode powers with and without noise [W], (N, 2).
+        incidence_angle, emission_angle [rad], distance [m], visible_fraction [-]: (N, 2).
+        phi, phidot: true state of photodiode 1 [rad, rad/s], (N,).
+        gimbal_angle, gimbal_rate: encoder angle and rate [rad, rad/s], (N,).
+        hull_pos: AUV position [m], (N, 3).
+        rays: (N, 2) which photodiodes cast rays this step (the others were provably clear).
+    """
+
+    power: np.ndarray
+    power_clean: np.ndarray
+    incidence_angle: np.ndarray
+    emission_angle: np.ndarray
+    distance: np.ndarray
+    visible_fraction: np.ndarray
+    phi: np.ndarray
+    phidot: np.ndarray
+    gimbal_angle: np.ndarray
+    gimbal_rate: np.ndarray
+    hull_pos: np.ndarray
+    rays: np.ndarray
+
+
+def _dot(a: np.ndarray, b: np.ndarray) -> np.ndarray:
+    """Sum over the last axis of 3, in the order of the plain-float code (x, y, z)."""
+    return a[..., 0] * b[..., 0] + a[..., 1] * b[..., 1] + a[..., 2] * b[..., 2]
+
+
+def _cross(a: np.ndarray, b: np.ndarray) -> np.ndarray:
+    return np.stack([a[..., 1] * b[..., 2] - a[..., 2] * b[..., 1],
+                     a[..., 2] * b[..., 0] - a[..., 0] * b[..., 2],
+                     a[..., 0] * b[..., 1] - a[..., 1] * b[..., 0]], axis=-1)
+
+
+def segment_distance(points: np.ndarray, a: np.ndarray, b: np.ndarray) -> np.ndarray:
+    """Distance [m] from each point (..., G, 3) to the segment a-b (..., 3)."""
+    ab = (b - a)[..., None, :]
+    ap = points - a[..., None, :]
+    s = np.clip(_dot(ap, ab) / np.maximum(_dot(ab, ab), 1e-300), 0.0, 1.0)
+    return np.linalg.norm(ap - s[..., None] * ab, axis=-1)
+
+
+class BatchSensor:
+    """The two-photodiode sensor of every world of a :class:`WorldBatch` in one pass.
+
+    Args:
+        batch: the worlds.
+        sensors: each world's :class:`IrradianceSensor` (its seed, noise and rays).
+        steps: control steps the run will take (the noise is drawn up front from each
+            sensor's generator: the same numbers, in the same order, as step by step).
+        margin: extra clearance [m] required before a line of sight counts as clear.
+    """
+
+    def __init__(self, batch: WorldBatch, sensors: Sequence[IrradianceSensor], steps: int,
+                 margin: float = 1e-6):
+        self.batch = batch
+        self.sensors = list(sensors)
+        w0 = batch.worlds[0]
+        self.constants = w0.config.constants
+        self.aperture_radius = w0.config.aperture_radius
+        self.margin = margin
+        self.noise = np.stack([s.rng.standard_normal((steps, 2)) * s.noise_std
+                               for s in self.sensors], axis=1)  # (steps, N, 2)
+        self.k = 0
+        self.static_clear = self._static_clear()
+
+    def _static_clear(self) -> bool:
+        """Whether no static light-blocking geom comes near any line of sight now (static
+        geoms do not move; planes count by the side the link is on)."""
+        b = self.batch
+        if b.static_geoms.size == 0:
+            return True
+        w = b.worlds[0]
+        m, d = w.model, w.data
+        reach = self.aperture_radius + self.margin
+        for g in b.static_geoms:
+            centre, rb = d.geom_xpos[g], m.geom_rbound[g]
+            for i in range(2):
+                p, led = b.site_pos[:, i], b.site_pos[:, 2]
+                if m.geom_type[g] == mujoco.mjtGeom.mjGEOM_PLANE:
+                    normal = d.geom_xmat[g].reshape(3, 3)[:, 2]
+                    side = np.minimum((p - centre) @ normal, (led - centre) @ normal)
+                    if np.any(side <= reach):
+                        return False
+                elif rb <= 0 or np.any(segment_distance(centre[None, None, :], p, led)
+                                       <= rb + reach):
+                    return False
+        return True
+
+    def needs_rays(self) -> np.ndarray:
+        """(N, 2): which photodiodes have a light-blocking geom within reach of their
+        line of sight to the LED aperture (its bounding sphere within the aperture
+        radius of the segment photodiode-LED)."""
+        b = self.batch
+        n = len(b.worlds)
+        if not self.static_clear:
+            return np.ones((n, 2), dtype=bool)
+        out = np.zeros((n, 2), dtype=bool)
+        if b.moving_geoms.size == 0:
+            return out
+        led = b.site_pos[:, 2]
+        centres = b.geom_pos
+        reach = b.rbound + self.aperture_radius + self.margin  # (G,)
+        # Coarse pass: both segments lie in the ball around the LED through the farther
+        # photodiode; only geoms that reach into it get the exact segment test.
+        radius = np.sqrt(np.max(_dot(b.site_pos[:, :2] - led[:, None], b.site_pos[:, :2]
+                                     - led[:, None]), axis=1))
+        gap = centres - led[:, None]
+        near = np.sqrt(_dot(gap, gap)) <= radius[:, None] + reach
+        worlds, geoms = np.nonzero(near)
+        if worlds.size:
+            for i in range(2):
+                dist = segment_distance(centres[worlds, geoms][:, None],
+                                        b.site_pos[worlds, i], led[worlds])[:, 0]
+                np.logical_or.at(out[:, i], worlds, dist <= reach[geoms])
+        return out
+
+    def read(self) -> BatchReading:
+        """Sample every world's photodiodes at the current state (then the next step's
+        noise is used)."""
+        b, c = self.batch, self.constants
+        led = b.site_pos[:, 2]
+        v = led[:, None, :] - b.site_pos[:, :2]  # (N, 2, 3)
+        dist = np.sqrt(_dot(v, v))
+        u = v / dist[..., None]
+        normal = b.photodiode_normal
+        axis = b.site_mat[:, 2, 2::3][:, None, :]
+        hinge = b.hinge_axis[:, None, :]
+        phi = np.arctan2(_dot(_cross(normal, u), hinge), _dot(normal, u))
+        theta = np.arccos(np.clip(-_dot(axis, u), -1.0, 1.0))
+        rays = self.needs_rays()
+        vis = np.ones_like(dist)
+        for n, i in zip(*np.nonzero(rays), strict=True):
+            s = self.sensors[n]
+            vis[n, i] = s.visible_fraction(int(i), s.aperture_points())
+        clean = received_power(transmitter_gain(dist, theta, c), phi, c.receiver, vis)
+        power = clean + self.noise[self.k]
+        self.k += 1
+        return BatchReading(power, clean, phi, theta, dist, vis, phi[:, 0].copy(),
+                            self.incidence_rate0(), b.qpos_hinge.copy(),
+                            b.qvel_hinge.copy(), b.hull_pos.copy(), rays)
+
+    def incidence_rate0(self) -> np.ndarray:
+        """d(phi_1)/dt of every world [rad/s] (:meth:`IrradianceSensor.incidence_rate`)."""
+        b = self.batch
+        ang, lin = b.photodiode_velocity0()
+        los = b.site_pos[:, 2] - b.site_pos[:, 0]
+        rel = b.transmitter_velocity - lin
+        d2 = _dot(los, los)
+        omega_los = _dot(_cross(los, rel), b.hinge_axis) / d2
+        return omega_los - _dot(ang, b.hinge_axis)
+
+
+def clear_share(rays: np.ndarray) -> float:
+    """Share of (world, photodiode, step) samples that needed no rays [-]."""
+    return 1.0 - float(np.mean(rays)) if rays.size else math.nan
