@@ -19,30 +19,20 @@ import numpy as np
 
 from ..optics import received_power, transmitter_gain
 from .batch import WorldBatch
-from .sensor import IrradianceSensor
+from .sensor import IrradianceSensor, SensorReading
 
 
 @dataclass
-class BatchReading:
-    """One sample of N sensors; arrays have a leading axis of N worlds.
+class BatchReading(SensorReading):
+    """One sample of N sensors: the fields of :class:`SensorReading` with a leading axis
+    of N worlds (``phi``, ``phidot``: (N,)), and
 
     Attributes:
-        power, power_clean: photodiode powers with and without noise [W], (N, 2).
-        incidence_angle, emission_angle [rad], distance [m], visible_fraction [-]: (N, 2).
-        phi, phidot: true state of photodiode 1 [rad, rad/s], (N,).
         gimbal_angle, gimbal_rate: encoder angle and rate [rad, rad/s], (N,).
         hull_pos: AUV position [m], (N, 3).
         rays: (N, 2) which photodiodes cast rays this step (the others were provably clear).
     """
 
-    power: np.ndarray
-    power_clean: np.ndarray
-    incidence_angle: np.ndarray
-    emission_angle: np.ndarray
-    distance: np.ndarray
-    visible_fraction: np.ndarray
-    phi: np.ndarray
-    phidot: np.ndarray
     gimbal_angle: np.ndarray
     gimbal_rate: np.ndarray
     hull_pos: np.ndarray
