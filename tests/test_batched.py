@@ -135,3 +135,15 @@ def test_worlds_share_a_model_unless_a_disturbance_changes_it():
     assert parse_disturbance("current").changes_model
     shared.batch.close()
     own.batch.close()
+
+
+def test_run_many_batches_a_workers_seeds_and_keeps_their_numbers():
+    from ledsim.loop.report import BATCH_MIN, run_many
+
+    cfg = RunConfig(estimator="ekf", supervision=False, seconds=1.0, seeds=BATCH_MIN,
+                    workers=1)
+    summary, trace = run_many(cfg, progress=False)
+    singles = [run_once(cfg, s, keep_trace=s == 0) for s in range(BATCH_MIN)]
+    np.testing.assert_allclose(trace.xhat, singles[0].trace.xhat, rtol=0, atol=TOL)
+    assert summary.mean_power.mean == pytest.approx(
+        np.mean([o.metrics.mean_power for o in singles]), abs=TOL)
