@@ -33,8 +33,6 @@ from .kkl import KKLObserver
 class BatchedEstimator:
     """N copies of one estimator; see the module docstring."""
 
-    vectorised = True
-
     def __init__(self, template: Estimator, n: int):
         self.template = template
         self.system = template.system
@@ -49,6 +47,15 @@ class BatchedEstimator:
     def predict(self, u: np.ndarray) -> None:
         raise NotImplementedError
 
+    def usable_groups(self, y: np.ndarray):
+        """(trajectory indices, usable outputs) for each pattern of usable outputs in
+        ``y`` (N, p), skipping the trajectories with none (they take no update)."""
+        ok = usable_mask(self.system, y)
+        patterns, inverse = np.unique(ok, axis=0, return_inverse=True)
+        for j, pattern in enumerate(patterns):
+            if pattern.any():
+                yield np.flatnonzero(inverse.reshape(-1) == j), pattern
+
     def _guess(self, x0) -> np.ndarray:
         guess = self.system.domain_center if x0 is None else x0
         return np.array(np.broadcast_to(np.asarray(guess, dtype=float),
@@ -57,8 +64,6 @@ class BatchedEstimator:
 
 class PerTrajectory(BatchedEstimator):
     """Fallback: N independent estimators stepped in a loop (any :class:`Estimator`)."""
-
-    vectorised = False
 
     def __init__(self, estimators: Sequence[Estimator]):
         super().__init__(estimators[0], len(estimators))

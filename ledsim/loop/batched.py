@@ -29,11 +29,10 @@ from observer.batched import PerTrajectory, batched
 from ..physics.batch import WorldBatch
 from ..physics.batch_sensor import BatchSensor
 from ..physics.disturbances import parse_disturbance
-from ..physics.sensor import IrradianceSensor
 from ..physics.simulation import SimulationResult
 from ..physics.system import GimbalSystem
 from ..physics.world import LinkWorld
-from .closed_loop import RunOutcome, hold_torque, make_supervisor, outcome
+from .closed_loop import RunOutcome, hold_torque, make_supervisor, outcome, start_world
 from .config import RunConfig
 from .estimation import identified_model, loop_estimator
 from .gate import BatchDropoutGate
@@ -82,17 +81,13 @@ class BatchedClosedLoop:
             self.estimator = batched(template, n, seeded=lambda e, k: e.seed_run(
                 self.seeds[k]))
         worlds, sensors, dists = [], [], []
-        x0 = self.scenario.x0
         share = not any(parse_disturbance(d).changes_model for d in cfg.disturbances)
         for s in self.seeds:
             w = LinkWorld(self.system.config, share_model_of=worlds[0] if share and worlds
                           else None)
-            w.reset(gimbal_angle=self.system.phi_home - x0[0], gimbal_rate=0.0 - x0[1])
-            sensors.append(IrradianceSensor(w, seed=s, noise_scale=cfg.noise_scale))
-            d = [parse_disturbance(spec) for spec in cfg.disturbances]
-            for di in d:
-                di.reset(s)
+            sensor, d = start_world(cfg, self.system, w, s)
             worlds.append(w)
+            sensors.append(sensor)
             dists.append(d)
         self.disturbances = dists
         self.q_hold = np.array([w.gimbal_angle for w in worlds])

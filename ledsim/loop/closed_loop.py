@@ -21,6 +21,7 @@ from ..physics.disturbances import parse_disturbance
 from ..physics.sensor import IrradianceSensor, SensorReading
 from ..physics.simulation import simulate
 from ..physics.system import GimbalSystem
+from ..physics.world import LinkWorld
 from ..results import DictAccess
 from .config import RunConfig
 from .estimation import (  # noqa: F401 (re-exported)
@@ -76,6 +77,19 @@ def achievable_power(res, c) -> np.ndarray:
     of that moment's distance and LED angle, times the receiver's peak response."""
     g_max = float(receiver_response(intensity_maximum(c), c.receiver))
     return transmitter_gain(res.distance[:, 0], res.emission_angle[:, 0], c) * g_max
+
+
+def start_world(cfg: RunConfig, system: GimbalSystem, world: LinkWorld, seed: int
+                ) -> tuple[IrradianceSensor, list]:
+    """Put ``world`` in the scenario's initial state and give it the run's sensor and
+    disturbances, both seeded with ``seed``."""
+    x0 = cfg.scenario_spec.x0
+    world.reset(gimbal_angle=system.phi_home - x0[0], gimbal_rate=0.0 - x0[1])
+    sensor = IrradianceSensor(world, seed=seed, noise_scale=cfg.noise_scale)
+    disturbances = [parse_disturbance(d) for d in cfg.disturbances]
+    for d in disturbances:
+        d.reset(seed)
+    return sensor, disturbances
 
 
 def make_supervisor(cfg: RunConfig, system: GimbalSystem, estimator, estimator_system,
@@ -135,12 +149,7 @@ class ClosedLoop:
         self.law = self.scenario.start_law(constants)
         self.gate = DropoutGate(constants)
         self.world = self.system.world
-        self.world.reset(gimbal_angle=self.system.phi_home - self.scenario.x0[0],
-                         gimbal_rate=0.0 - self.scenario.x0[1])
-        self.sensor = IrradianceSensor(self.world, seed=seed, noise_scale=cfg.noise_scale)
-        self.disturbances = [parse_disturbance(d) for d in cfg.disturbances]
-        for d in self.disturbances:
-            d.reset(seed)
+        self.sensor, self.disturbances = start_world(cfg, self.system, self.world, seed)
         if self.estimator is not None:
             self.estimator.reset()
         self.on_step = on_step

@@ -38,21 +38,19 @@ class WorldBatch:
         n = len(self.worlds)
         w0 = self.worlds[0]
         m = w0.model
-        self.Te = w0.config.constants.Te
         self._sites = np.array([w0._pd[0], w0._pd[1], w0._led])
         self._gimbal = w0._gimbal
         self._root = int(m.body_rootid[w0._gimbal])
-        # Light-blocking geoms that move (static ones are checked once, below).
+        # Geoms that block light (groups 0-2, not the gimbal): planes, and the others
+        # with their bounding radius (none: no bound, so rays always).
         blocking = (m.geom_group < 3) & (m.geom_bodyid != w0._gimbal) & \
             (RAY_GROUPS[np.minimum(m.geom_group, 5)] > 0)
-        static = m.body_weldid[m.geom_bodyid] == 0
-        self.moving_geoms = np.flatnonzero(blocking & ~static)
-        self.static_geoms = np.flatnonzero(blocking & static)
-        self.rbound = m.geom_rbound[self.moving_geoms].copy()
-        # Views into each world's MjData (its arrays never move), read every step.
-        self._views = [self._world_views(w) for w in self.worlds]
+        plane = m.geom_type == mujoco.mjtGeom.mjGEOM_PLANE
+        self.planes = np.flatnonzero(blocking & plane)
+        self.blocking_geoms = np.flatnonzero(blocking & ~plane)
+        self.rbound = m.geom_rbound[self.blocking_geoms].copy()
+        self.unbounded = bool(np.any(self.rbound <= 0))
         self._all_sites = m.nsite == 3 and list(self._sites) == [0, 1, 2]
-        self._substeps = w0.config.substeps
         self.site_pos = np.empty((n, 3, 3))  # pd1, pd2, LED
         self.site_mat = np.empty((n, 3, 9))
         self.gimbal_mat = np.empty((n, 9))
@@ -62,21 +60,21 @@ class WorldBatch:
         self._qvel_hinge = np.empty((n, 1))
         self.hull_pos = np.empty((n, 3))
         self.geom_xpos = np.empty((n, m.ngeom, 3))
+        self._plane_mat = np.empty((self.planes.size, n, 9))
         self.transmitter_velocity = np.empty((n, 3))
-        self.applied = np.zeros(n)
+        self.applied = np.zeros(n)  # motor torques of the last step [N m]
         self.threads = max(1, min(int(threads), n))
         bounds = np.linspace(0, n, self.threads + 1).round().astype(int)
         self._chunks = [range(a, b) for a, b in zip(bounds[:-1], bounds[1:], strict=True)]
         self._pool = ThreadPoolExecutor(self.threads) if self.threads > 1 else None
         self.time = w0.time
-        self._gathers = self._gather_plan()
+        # Each output as a flat run of its worlds' rows, so that one C-level concatenate
+        # fills it (np.stack's Python bookkeeping cost 10 us per world-step).
+        self._gathers = [(out.reshape((-1,) + out.shape[2:]), views)
+                         for out, views in self._gather_plan()]
         for i in range(n):
             self._prepare(i, self.time)
         self._gather()
-
-    def _world_views(self, w: LinkWorld) -> tuple:
-        d = w.data
-        return w, d, d.ctrl[w._motor:w._motor + 1], d.xfrc_applied[w._auv]
 
     def _gather_plan(self) -> list[tuple[np.ndarray, list]]:
         """(output array, one view per world) of every quantity read each step."""
@@ -102,7 +100,9 @@ class WorldBatch:
                                 for w, d in zip(ws, ds, strict=True)]),
             (self.hull_pos, [d.xpos[w._auv] for w, d in zip(ws, ds, strict=True)]),
             (self.geom_xpos, [d.geom_xpos for d in ds]),
-            (self.transmitter_velocity, [w.transmitter_velocity for w in ws])]
+            (self.transmitter_velocity, [w.transmitter_velocity for w in ws])] + [
+            (self._plane_mat[j], [d.geom_xmat[p] for d in ds])
+            for j, p in enumerate(self.planes.tolist())]
 
     @property
     def qpos_hinge(self) -> np.ndarray:
@@ -126,44 +126,34 @@ class WorldBatch:
         self.close()
 
     def _prepare(self, i: int, t: float) -> None:
-        """Start of step t in world i: disturbances act, kinematics, poses copied out
-        (the order of :func:`ledsim.physics.simulation.simulate`; LinkWorld's methods
-        inlined on cached views, since this runs N times per step)."""
-        w, d, _, xfrc = self._views[i]
-        m = w.model
-        xfrc.fill(0.0)  # clear_hull_wrench
+        """Start of step t in world i: disturbances act, then kinematics (the order of
+        :func:`ledsim.physics.simulation.simulate`)."""
+        w = self.worlds[i]
+        w.clear_hull_wrench()
         for dist in self.disturbances[i]:
             dist.apply(w, t)
-        mujoco.mj_kinematics(m, d)  # forward_kinematics
-        mujoco.mj_comPos(m, d)
-        mujoco.mj_comVel(m, d)
+        w.forward_kinematics()
 
     def _gather(self) -> None:
-        """Copy every world's poses into the (N, ...) arrays (one stack per quantity:
-        cheaper than N row copies)."""
+        """Copy every world's poses into the (N, ...) arrays (one concatenate per
+        quantity: cheaper than N row copies)."""
         for out, views in self._gathers:
-            np.stack(views, out=out)
+            np.concatenate(views, out=out)
         if not self._all_sites:
             self.site_pos = self._site_xpos_all[:, self._sites]
             self.site_mat = self._site_xmat_all[:, self._sites]
 
     def _advance(self, chunk: range, torques: list, t_next: float) -> None:
-        views, nstep = self._views, self._substeps
         for i in chunk:
-            w, d, ctrl = views[i][:3]
-            ctrl[0] = torques[i]
-            t0 = d.time
-            mujoco.mj_step(w.model, d, nstep)
-            if d.time <= t0:  # MuJoCo reset the data: the physics became unstable
-                w.check_stable(t0)
+            w = self.worlds[i]
+            self.applied[i] = w.set_torque(torques[i])
+            w.step()
             self._prepare(i, t_next)
 
     def step(self, torques: np.ndarray, t_next: float) -> None:
         """Command the motor torques [N m] (clipped at the limit; ``applied`` holds what
         was applied), advance every world by Te, and prepare step ``t_next`` [s]."""
-        lim = self.worlds[0].config.torque_limit
-        self.applied = np.clip(np.asarray(torques, dtype=float), -lim, lim)
-        torques = self.applied.tolist()
+        torques = np.asarray(torques, dtype=float).tolist()
         if self._pool is None:
             self._advance(self._chunks[0], torques, t_next)
         else:
@@ -180,8 +170,18 @@ class WorldBatch:
 
     @property
     def geom_pos(self) -> np.ndarray:
-        """Centres of the moving light-blocking geoms, (N, G, 3) [m]."""
-        return self.geom_xpos[:, self.moving_geoms]
+        """Centres of the light-blocking geoms other than planes, (N, G, 3) [m]."""
+        return self.geom_xpos[:, self.blocking_geoms]
+
+    @property
+    def plane_pos(self) -> np.ndarray:
+        """Points of the light-blocking planes, (N, P, 3) [m]."""
+        return self.geom_xpos[:, self.planes]
+
+    @property
+    def plane_normal(self) -> np.ndarray:
+        """Unit normals of the light-blocking planes, (N, P, 3)."""
+        return self._plane_mat[:, :, 2::3].transpose(1, 0, 2)
 
     @property
     def photodiode_normal(self) -> np.ndarray:
@@ -193,8 +193,16 @@ class WorldBatch:
         ``mj_objectVelocity`` computes it (the body's com-based velocity moved to the
         site)."""
         ang, lin = self.gimbal_cvel[:, :3], self.gimbal_cvel[:, 3:]
-        dif = self.site_pos[:, 0] - self.root_com
-        cros = np.stack([dif[:, 1] * ang[:, 2] - dif[:, 2] * ang[:, 1],
-                         dif[:, 2] * ang[:, 0] - dif[:, 0] * ang[:, 2],
-                         dif[:, 0] * ang[:, 1] - dif[:, 1] * ang[:, 0]], axis=-1)
-        return ang, lin - cros
+        return ang, lin - cross3(self.site_pos[:, 0] - self.root_com, ang)
+
+
+def dot3(a: np.ndarray, b: np.ndarray) -> np.ndarray:
+    """Sum over the last axis of 3, in the order of the plain-float code (x, y, z)."""
+    return a[..., 0] * b[..., 0] + a[..., 1] * b[..., 1] + a[..., 2] * b[..., 2]
+
+
+def cross3(a: np.ndarray, b: np.ndarray) -> np.ndarray:
+    """Cross product over the last axis of 3 (MuJoCo's ``mju_cross`` order)."""
+    return np.stack([a[..., 1] * b[..., 2] - a[..., 2] * b[..., 1],
+                     a[..., 2] * b[..., 0] - a[..., 0] * b[..., 2],
+                     a[..., 0] * b[..., 1] - a[..., 1] * b[..., 0]], axis=-1)

@@ -10,15 +10,13 @@ does).
 
 from __future__ import annotations
 
-import math
 from collections.abc import Sequence
 from dataclasses import dataclass
 
-import mujoco
 import numpy as np
 
 from ..optics import received_power, transmitter_gain
-from .batch import WorldBatch
+from .batch import WorldBatch, cross3, dot3
 from .sensor import IrradianceSensor, SensorReading
 
 
@@ -39,22 +37,11 @@ class BatchReading(SensorReading):
     rays: np.ndarray
 
 
-def _dot(a: np.ndarray, b: np.ndarray) -> np.ndarray:
-    """Sum over the last axis of 3, in the order of the plain-float code (x, y, z)."""
-    return a[..., 0] * b[..., 0] + a[..., 1] * b[..., 1] + a[..., 2] * b[..., 2]
-
-
-def _cross(a: np.ndarray, b: np.ndarray) -> np.ndarray:
-    return np.stack([a[..., 1] * b[..., 2] - a[..., 2] * b[..., 1],
-                     a[..., 2] * b[..., 0] - a[..., 0] * b[..., 2],
-                     a[..., 0] * b[..., 1] - a[..., 1] * b[..., 0]], axis=-1)
-
-
 def segment_distance(points: np.ndarray, a: np.ndarray, b: np.ndarray) -> np.ndarray:
     """Distance [m] from each point (..., G, 3) to the segment a-b (..., 3)."""
     ab = (b - a)[..., None, :]
     ap = points - a[..., None, :]
-    s = np.clip(_dot(ap, ab) / np.maximum(_dot(ab, ab), 1e-300), 0.0, 1.0)
+    s = np.clip(dot3(ap, ab) / np.maximum(dot3(ab, ab), 1e-300), 0.0, 1.0)
     return np.linalg.norm(ap - s[..., None] * ab, axis=-1)
 
 
@@ -80,51 +67,34 @@ class BatchSensor:
         self.noise = np.stack([s.rng.standard_normal((steps, 2)) * s.noise_std
                                for s in self.sensors], axis=1)  # (steps, N, 2)
         self.k = 0
-        self.static_clear = self._static_clear()
-
-    def _static_clear(self) -> bool:
-        """Whether no static light-blocking geom comes near any line of sight now (static
-        geoms do not move; planes count by the side the link is on)."""
-        b = self.batch
-        if b.static_geoms.size == 0:
-            return True
-        w = b.worlds[0]
-        m, d = w.model, w.data
-        reach = self.aperture_radius + self.margin
-        for g in b.static_geoms:
-            centre, rb = d.geom_xpos[g], m.geom_rbound[g]
-            for i in range(2):
-                p, led = b.site_pos[:, i], b.site_pos[:, 2]
-                if m.geom_type[g] == mujoco.mjtGeom.mjGEOM_PLANE:
-                    normal = d.geom_xmat[g].reshape(3, 3)[:, 2]
-                    side = np.minimum((p - centre) @ normal, (led - centre) @ normal)
-                    if np.any(side <= reach):
-                        return False
-                elif rb <= 0 or np.any(segment_distance(centre[None, None, :], p, led)
-                                       <= rb + reach):
-                    return False
-        return True
 
     def needs_rays(self) -> np.ndarray:
         """(N, 2): which photodiodes have a light-blocking geom within reach of their
-        line of sight to the LED aperture (its bounding sphere within the aperture
-        radius of the segment photodiode-LED)."""
+        line of sight to the LED aperture: its bounding sphere within the aperture radius
+        of the segment photodiode-LED, or a plane that close to either end."""
         b = self.batch
         n = len(b.worlds)
-        if not self.static_clear:
+        if b.unbounded:
             return np.ones((n, 2), dtype=bool)
         out = np.zeros((n, 2), dtype=bool)
-        if b.moving_geoms.size == 0:
-            return out
         led = b.site_pos[:, 2]
+        if b.planes.size:
+            normal = b.plane_normal
+            led_side = dot3(led[:, None] - b.plane_pos, normal)  # (N, P)
+            for i in range(2):
+                pd_side = dot3(b.site_pos[:, None, i] - b.plane_pos, normal)
+                out[:, i] = np.any(np.minimum(pd_side, led_side)
+                                   <= self.aperture_radius + self.margin, axis=1)
+        if b.blocking_geoms.size == 0:
+            return out
         centres = b.geom_pos
         reach = b.rbound + self.aperture_radius + self.margin  # (G,)
         # Coarse pass: both segments lie in the ball around the LED through the farther
         # photodiode; only geoms that reach into it get the exact segment test.
-        radius = np.sqrt(np.max(_dot(b.site_pos[:, :2] - led[:, None], b.site_pos[:, :2]
+        radius = np.sqrt(np.max(dot3(b.site_pos[:, :2] - led[:, None], b.site_pos[:, :2]
                                      - led[:, None]), axis=1))
         gap = centres - led[:, None]
-        near = np.sqrt(_dot(gap, gap)) <= radius[:, None] + reach
+        near = np.sqrt(dot3(gap, gap)) <= radius[:, None] + reach
         worlds, geoms = np.nonzero(near)
         if worlds.size:
             for i in range(2):
@@ -139,13 +109,13 @@ class BatchSensor:
         b, c = self.batch, self.constants
         led = b.site_pos[:, 2]
         v = led[:, None, :] - b.site_pos[:, :2]  # (N, 2, 3)
-        dist = np.sqrt(_dot(v, v))
+        dist = np.sqrt(dot3(v, v))
         u = v / dist[..., None]
         normal = b.photodiode_normal
         axis = b.site_mat[:, 2, 2::3][:, None, :]
         hinge = b.hinge_axis[:, None, :]
-        phi = np.arctan2(_dot(_cross(normal, u), hinge), _dot(normal, u))
-        theta = np.arccos(np.clip(-_dot(axis, u), -1.0, 1.0))
+        phi = np.arctan2(dot3(cross3(normal, u), hinge), dot3(normal, u))
+        theta = np.arccos(np.clip(-dot3(axis, u), -1.0, 1.0))
         rays = self.needs_rays()
         vis = np.ones_like(dist)
         for n, i in zip(*np.nonzero(rays), strict=True):
@@ -164,11 +134,7 @@ class BatchSensor:
         ang, lin = b.photodiode_velocity0()
         los = b.site_pos[:, 2] - b.site_pos[:, 0]
         rel = b.transmitter_velocity - lin
-        d2 = _dot(los, los)
-        omega_los = _dot(_cross(los, rel), b.hinge_axis) / d2
-        return omega_los - _dot(ang, b.hinge_axis)
+        d2 = dot3(los, los)
+        omega_los = dot3(cross3(los, rel), b.hinge_axis) / d2
+        return omega_los - dot3(ang, b.hinge_axis)
 
-
-def clear_share(rays: np.ndarray) -> float:
-    """Share of (world, photodiode, step) samples that needed no rays [-]."""
-    return 1.0 - float(np.mean(rays)) if rays.size else math.nan

@@ -166,3 +166,18 @@ def build_spec(config: WorldConfig) -> mujoco.MjSpec:
     if config.hull_mass is not None:
         spec.geom("hull").mass = config.hull_mass
     return spec
+
+
+def set_buoyancy(m: mujoco.MjModel, auv: int, gimbal: int, water_density: float) -> None:
+    """Buoyancy = displaced water weight: gravcomp = rho V / m for the hull body ``auv``.
+    V counts the geoms the water acts on (fluid forces on), not eye-only trim; the
+    gimbal (body ``gimbal``) floats whenever there is water."""
+    volume = 0.0
+    for g in np.flatnonzero((m.geom_bodyid == auv) & (m.geom_fluid[:, 0] > 0)):
+        size = m.geom_size[g]
+        if m.geom_type[g] == mujoco.mjtGeom.mjGEOM_ELLIPSOID:
+            volume += 4.0 / 3.0 * math.pi * float(np.prod(size))
+        elif m.geom_type[g] == mujoco.mjtGeom.mjGEOM_BOX:
+            volume += 8.0 * float(np.prod(size))
+    m.body_gravcomp[auv] = water_density * volume / m.body_mass[auv]
+    m.body_gravcomp[gimbal] = 1.0 if water_density > 0 else 0.0

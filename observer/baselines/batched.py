@@ -8,8 +8,7 @@ from collections.abc import Sequence
 import numpy as np
 
 from ..batched import BatchedEstimator
-from ..estimator import GaussianFilter, usable_mask
-from .ekf import ExtendedKalmanFilter  # noqa: F401 (the templates, for the docs)
+from ..estimator import GaussianFilter
 from .pf import ParticleFilter
 from .ukf import UnscentedKalmanFilter, nearest_covariance
 
@@ -28,14 +27,6 @@ class _BatchedGaussian(BatchedEstimator):
         self.x = self._guess(x0)
         self.P = np.broadcast_to(self.P0, (self.n,) + self.P0.shape).copy()
         self.inconsistent = np.zeros(self.n, dtype=int)
-
-    def _groups(self, y: np.ndarray):
-        """(indices, usable outputs) per pattern of usable outputs, skipping none."""
-        ok = usable_mask(self.system, y)
-        patterns, inverse = np.unique(ok, axis=0, return_inverse=True)
-        for j, pattern in enumerate(patterns):
-            if pattern.any():
-                yield np.flatnonzero(inverse.reshape(-1) == j), pattern
 
     def _diverged(self, k: np.ndarray, innov: np.ndarray, S: np.ndarray) -> np.ndarray:
         """Per trajectory of ``k``: count an implausible innovation; restart (and report
@@ -58,7 +49,7 @@ class BatchedEKF(_BatchedGaussian):
     def update(self, y) -> np.ndarray:
         y = np.asarray(y, dtype=float)
         sys = self.system
-        for k, ok in self._groups(y):
+        for k, ok in self.usable_groups(y):
             x, P = self.x[k], self.P[k]
             H = sys.h_jacobian(x)[:, ok]
             innov = (y[k] - sys.h(x))[:, ok]
@@ -104,7 +95,7 @@ class BatchedUKF(_BatchedGaussian):
 
     def update(self, y) -> np.ndarray:
         y = np.asarray(y, dtype=float)
-        for k, ok in self._groups(y):
+        for k, ok in self.usable_groups(y):
             X = self._sigma_points(k)
             Y = self.system.h(X)[..., ok]
             y_mean = np.einsum("s,nso->no", self.Wm, Y)
@@ -155,12 +146,7 @@ class BatchedParticleFilter(BatchedEstimator):
 
     def update(self, y) -> np.ndarray:
         y = np.asarray(y, dtype=float)
-        ok = usable_mask(self.system, y)
-        patterns, inverse = np.unique(ok, axis=0, return_inverse=True)
-        for j, pattern in enumerate(patterns):
-            if not pattern.any():
-                continue
-            k = np.flatnonzero(inverse.reshape(-1) == j)
+        for k, pattern in self.usable_groups(y):
             chi2 = self._chi2(k, y, pattern)
             lost = chi2.min(axis=1) > self.template.lost_chi2 * pattern.sum()
             for jj in np.flatnonzero(lost):  # sensor resetting, one filter at a time
