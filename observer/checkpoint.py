@@ -4,6 +4,10 @@ A checkpoint is one ``.pt`` file holding only tensors and a JSON string (so it l
 with ``torch.load(..., weights_only=True)``; nothing is unpickled) and a readable
 ``.json`` copy of the metadata beside it. Both are written atomically. Loading checks
 the metadata (Te, A, B, model constants) against the system it is loaded for.
+
+Loading does not import torch: :mod:`observer.tensorfile` reads the file's tensors
+without executing anything in it, and only a file it does not recognise goes to
+``torch.load(..., weights_only=True)``.
 """
 
 from __future__ import annotations
@@ -14,6 +18,7 @@ from pathlib import Path
 
 import numpy as np
 
+from . import tensorfile
 from .atomic import atomic_write_bytes, atomic_write_text
 from .errors import ObserverError
 from .kkl import KKLObserver
@@ -58,10 +63,8 @@ def load(path: str | Path, system: DiscreteSystem, check: bool = True) -> KKLObs
     path = Path(path)
     if not path.is_file():
         raise CheckpointError(f"checkpoint {str(path)!r} does not exist")
-    import torch
-
     try:
-        payload = torch.load(path, map_location="cpu", weights_only=True)
+        payload = _read(path)
         meta = json.loads(payload["metadata_json"])
         enc, dec = (_net(payload, prefix) for prefix in ("encoder_T", "decoder_T_star"))
         lam = np.asarray(meta["eigenvalues"], dtype=float)
@@ -86,10 +89,26 @@ def load(path: str | Path, system: DiscreteSystem, check: bool = True) -> KKLObs
     return obs
 
 
+def _read(path: Path) -> dict:
+    """The saved dict, tensors as numpy arrays: by :mod:`observer.tensorfile` (no torch),
+    or for a file it does not recognise by ``torch.load(..., weights_only=True)``."""
+    try:
+        return tensorfile.read(path)
+    except tensorfile.Unsupported:
+        pass
+    import torch
+
+    payload = torch.load(path, map_location="cpu", weights_only=True)
+    if not isinstance(payload, dict):
+        raise TypeError("not a dict")
+    return {k: v.numpy(force=True) if isinstance(v, torch.Tensor) else v
+            for k, v in payload.items()}
+
+
 def _net(payload: dict, prefix: str) -> NumpyMLP:
     """A network from its named tensors (``Wm<i>``, ``bm<i>``: layers past the first)."""
     def arr(k):
-        return payload[f"{prefix}.{k}"].double().numpy()
+        return np.asarray(payload[f"{prefix}.{k}"], dtype=np.float64)
 
     n_mid = sum(1 for k in payload if k.startswith(f"{prefix}.Wm"))
     if n_mid > 16:

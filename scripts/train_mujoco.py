@@ -12,6 +12,7 @@ at about d = 0.085-0.3 m), saved as kkl_mujoco_d0.085_noise<s>.pt (no suffix for
 from __future__ import annotations
 
 import argparse
+import os
 import time
 
 import numpy as np
@@ -33,11 +34,15 @@ def main() -> None:
     ap.add_argument("--bank", action="store_true",
                     help="train every member of the shipped bank (overrides the above)")
     ap.add_argument("--samples", type=int, default=200_000)
+    ap.add_argument("--threads", type=int, default=os.cpu_count() or 1,
+                    help="threads that generate the transitions (mujoco.rollout and the "
+                         "world batch; default: every core)")
     args = ap.parse_args()
     if args.bank:
         args.distances, args.noise_scales = [REFERENCE_DISTANCE], list(BANK_NOISE)
     for d, s in [(d, s) for d in args.distances for s in args.noise_scales]:
-        system = GimbalSystem(noisier(WorldConfig(constants=LinkConstants(distance=d)), s))
+        system = GimbalSystem(noisier(WorldConfig(constants=LinkConstants(distance=d)), s),
+                              threads=args.threads)
         # The default preset also at d = 0.2 without a bank: the low-light one lost the
         # link in the closed loop (availability 0.11 against 0.67; docs/physics.md).
         design, cfg = observer_preset(bank_preset(s), system.Te)
@@ -46,6 +51,7 @@ def main() -> None:
         data = generate_transitions(system, cfg.n_samples, cfg.u_bar,
                                     np.random.default_rng(cfg.seed))
         t_data = time.perf_counter() - t0
+        system.close()
         obs, rep = train_kkl(system, design, cfg, data=data)
         path = checkpoint.save(obs, shipped_checkpoint(d, "mujoco", noise=s), extra={
             "data": {"source": "MuJoCo (set state, step Te)", "seconds": t_data}})

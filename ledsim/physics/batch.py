@@ -150,18 +150,32 @@ class WorldBatch:
             w.step()
             self._prepare(i, t_next)
 
+    def _map(self, work, *args) -> None:
+        """``work(chunk, *args)`` for every thread's chunk of worlds, then gather."""
+        if self._pool is None:
+            work(self._chunks[0], *args)
+        else:
+            for f in [self._pool.submit(work, c, *args) for c in self._chunks]:
+                f.result()
+        self._gather()
+
     def step(self, torques: np.ndarray, t_next: float) -> None:
         """Command the motor torques [N m] (clipped at the limit; ``applied`` holds what
         was applied), advance every world by Te, and prepare step ``t_next`` [s]."""
-        torques = np.asarray(torques, dtype=float).tolist()
-        if self._pool is None:
-            self._advance(self._chunks[0], torques, t_next)
-        else:
-            for f in [self._pool.submit(self._advance, c, torques, t_next)
-                      for c in self._chunks]:
-                f.result()
-        self._gather()
+        self._map(self._advance, np.asarray(torques, dtype=float).tolist(), t_next)
         self.time = t_next
+
+    def _set_state(self, chunk: range, states: np.ndarray, spec: int) -> None:
+        for i in chunk:
+            w = self.worlds[i]
+            mujoco.mj_setState(w.model, w.data, states[i], spec)
+            self._prepare(i, float(states[i, 0]))
+
+    def set_state(self, states: np.ndarray) -> None:
+        """Every world to its full physics state (``mjSTATE_FULLPHYSICS``, (N, nstate),
+        as ``mujoco.rollout`` returns them), with its kinematics."""
+        self._map(self._set_state, states, mujoco.mjtState.mjSTATE_FULLPHYSICS)
+        self.time = float(states[0, 0])
 
     @property
     def hinge_axis(self) -> np.ndarray:

@@ -103,9 +103,9 @@ class BatchSensor:
                 np.logical_or.at(out[:, i], worlds, dist <= reach[geoms])
         return out
 
-    def read(self) -> BatchReading:
-        """Sample every world's photodiodes at the current state (then the next step's
-        noise is used)."""
+    def clean(self) -> tuple[np.ndarray, ...]:
+        """(clean power [W], phi [rad], theta [rad], distance [m], visible fraction,
+        rays cast), each (N, 2), of every world at the current state, without noise."""
         b, c = self.batch, self.constants
         led = b.site_pos[:, 2]
         v = led[:, None, :] - b.site_pos[:, :2]  # (N, 2, 3)
@@ -122,6 +122,13 @@ class BatchSensor:
             s = self.sensors[n]
             vis[n, i] = s.visible_fraction(int(i), s.aperture_points())
         clean = received_power(transmitter_gain(dist, theta, c), phi, c.receiver, vis)
+        return clean, phi, theta, dist, vis, rays
+
+    def read(self) -> BatchReading:
+        """Sample every world's photodiodes at the current state (then the next step's
+        noise is used)."""
+        b = self.batch
+        clean, phi, theta, dist, vis, rays = self.clean()
         power = clean + self.noise[self.k]
         self.k += 1
         return BatchReading(power, clean, phi, theta, dist, vis, phi[:, 0].copy(),

@@ -50,8 +50,16 @@ class GimbalSystem(DiscreteSystem):
     state_names = ("phi [rad]", "phidot [rad/s]")
     output_names = ("P1 [W]", "P2 [W]")
 
+    #: Calls with at least this many states go through :class:`GimbalBatch` (the same
+    #: numbers, several times faster).
+    BATCH_MIN = 32
+
     def __init__(self, config: WorldConfig | None = None,
-                 domain: tuple[float, float] = (0.5, 0.5)):
+                 domain: tuple[float, float] = (0.5, 0.5), threads: int = 1):
+        if int(threads) < 1:
+            raise ValueError(f"threads={threads!r}: need at least 1")
+        self.threads = int(threads)
+        self._batch = None  # GimbalBatch, built on the first large call
         self.config = config or WorldConfig()
         self.world = LinkWorld(self.config)
         self.sensor = IrradianceSensor(self.world, noise=False)
@@ -78,10 +86,26 @@ class GimbalSystem(DiscreteSystem):
     def _set_state(self, x) -> None:
         self.world.reset(gimbal_angle=self.phi_home - x[0], gimbal_rate=-x[1])
 
+    def batched(self):
+        """The :class:`~ledsim.physics.batch_system.GimbalBatch` of this system."""
+        if self._batch is None:
+            from .batch_system import GimbalBatch
+
+            self._batch = GimbalBatch(self.world, self.phi_home, self.threads)
+        return self._batch
+
+    def close(self) -> None:
+        """Stop the batch's threads (if any were started)."""
+        if self._batch is not None:
+            self._batch.close()
+            self._batch = None
+
     def f(self, x, u=0.0):
         x = np.asarray(x, dtype=float)
         batch = x.reshape(-1, 2)
         torques = self.torque_for(self.input_array(u, x.shape[:-1])[..., 0]).reshape(-1)
+        if len(batch) >= self.BATCH_MIN:
+            return self.batched().f(batch, torques).reshape(x.shape)
         out = np.empty_like(batch)
         w = self.world
         for k, (xk, tau) in enumerate(zip(batch, torques, strict=True)):
@@ -95,6 +119,8 @@ class GimbalSystem(DiscreteSystem):
     def h(self, x):
         x = np.asarray(x, dtype=float)
         batch = x.reshape(-1, 2)
+        if len(batch) >= self.BATCH_MIN:
+            return self.batched().h(batch).reshape(x.shape[:-1] + (2,))
         geo = np.empty((len(batch), 4, 2))  # d, theta, phi, visible fraction per sample
         for k, xk in enumerate(batch):
             self._set_state(xk)
