@@ -219,6 +219,49 @@ def closed_loop_speed(estimator: str, integrator: str = "implicitfast") -> tuple
     return best.realtime_factor, best.us_per_step
 
 
+def transition_speed(n: int = 20_000) -> dict[str, float]:
+    """Microseconds per MuJoCo transition (``GimbalSystem.f`` and ``h`` of one state, as
+    ``scripts/train_mujoco.py`` generates them): one at a time, and batched
+    (``mujoco.rollout`` + a world batch) on 1 and 2 threads."""
+    from ledsim.physics.system import GimbalSystem
+    from observer.training import generate_transitions
+
+    out = {}
+    for label, threads, batch_min in (("one at a time", 1, 10**12),
+                                      ("batched, 1 thread", 1, None),
+                                      ("batched, 2 threads", 2, None)):
+        system = GimbalSystem(threads=threads)
+        if batch_min:
+            system.BATCH_MIN = batch_min
+        generate_transitions(system, 500, 0.0, np.random.default_rng(1))  # warm up
+        t0 = time.perf_counter()
+        generate_transitions(system, n, 0.0, np.random.default_rng(0))
+        out[label] = 1e6 * (time.perf_counter() - t0) / n
+        system.close()
+    return out
+
+
+def short_run(plot: bool) -> dict:
+    """Wall time [s] of ``ledsim run --seeds 1`` (the default 10 s align run) in a fresh
+    process, the share of it spent simulating (10 s over the run's real-time factor),
+    and whether torch was imported."""
+    import subprocess
+    import sys
+    import tempfile
+
+    with tempfile.TemporaryDirectory() as tmp:
+        cmd = [sys.executable, "-X", "importtime", "-m", "ledsim", "run", "--seeds", "1",
+               "-q", "--out", f"{tmp}/o"] + ([] if plot else ["--no-plot"])
+        t0 = time.perf_counter()
+        r = subprocess.run(cmd, capture_output=True, text=True, check=True)
+        wall = time.perf_counter() - t0
+        res = json.loads(Path(f"{tmp}/o/results.json").read_text())
+    sim = res["seconds"] / res["realtime_factor"]["mean"]
+    torch_imported = any(line.rstrip().endswith("| torch") for line in r.stderr.splitlines())
+    return {"wall_s": wall, "simulating_s": sim, "simulating_share": sim / wall,
+            "imports_torch": torch_imported}
+
+
 def render_speed(width: int = 640, height: int = 480, frames: int = 60) -> tuple[float, float]:
     """(frames/s with beam and overlay, frames/s of the bare MuJoCo render)."""
     from ledsim.physics.render import FrameRecorder
@@ -354,6 +397,28 @@ def main() -> None:
         rtf, us = loop[est] = closed_loop_speed(est)
         lines.append(f"| {est} | {rtf:.0f}x | {rtf / bare_rtf:.2f} | {1e4 / rtf:.0f} "
                      f"| {us:.1f} |")
+    trans = transition_speed()
+    ref = trans["one at a time"]
+    lines += ["", "## MuJoCo transitions for training (`scripts/train_mujoco.py`)", "",
+              "One transition is `GimbalSystem.h` and `GimbalSystem.f` of one state. "
+              "Batched, `f` runs the substeps in `mujoco.rollout` and reads phidot "
+              "through a world batch, and `h` reads the vectorised sensor "
+              "(`ledsim/physics/batch_system.py`); the numbers are the same.", "",
+              "| how | us per transition | speed-up |", "|---|---|---|"]
+    for label, us in trans.items():
+        lines.append(f"| {label} | {us:.1f} | {ref / us:.2f}x |")
+    runs = {plot: short_run(plot) for plot in (True, False)}
+    lines += ["", "## A short `ledsim run` (one seed, 10 s, fresh process)", "",
+              "| plots | wall time [s] | simulating [s] | share simulating | imports torch |",
+              "|---|---|---|---|---|"]
+    for plot, r in runs.items():
+        lines.append(f"| {'on' if plot else '`--no-plot`'} | {r['wall_s']:.2f} "
+                     f"| {r['simulating_s']:.2f} | {r['simulating_share']:.0%} "
+                     f"| {'yes' if r['imports_torch'] else 'no'} |")
+    lines += ["", "The rest is Python's start, importing numpy and MuJoCo, building the "
+              "scene, fitting the identified model (4000 transitions, batched) and, with "
+              "plots, importing matplotlib and drawing. The shipped observers load "
+              "without torch (`observer/tensorfile.py`)."]
     full, bare = render_speed()
     lines += ["", f"## Rendering ({os.environ.get('MUJOCO_GL', 'default')} backend, "
               "640x480, side camera)", "", "| what | frames / s |", "|---|---|",
@@ -384,6 +449,8 @@ def main() -> None:
                          "steps_per_s": b, "rollout_steps_per_s": r, "ratio": b / r}
                         for (e, s, t), (b, r) in batch_rows.items()],
             "render_fps": full, "render_fps_bare": bare,
+            "transitions_us": trans, "transitions_speedup": ref / trans["batched, 2 threads"],
+            "short_run": {"plots": runs[True], "no_plot": runs[False]},
             "threads": {"blas": os.environ["OPENBLAS_NUM_THREADS"], "torch": 1}}
         atomic_write_text(Path(args.json), json.dumps(figures, indent=2) + "\n")
 
