@@ -35,7 +35,7 @@ class GimbalBatch:
     Args:
         world: the system's world (reset to its home pose is taken from it).
         phi_home: phi [rad] at gimbal angle 0.
-        threads: threads for the rollout and the batch.
+        threads: threads for ``mujoco.rollout`` (the physics).
         block: worlds in the batch (states set and read per call).
     """
 
@@ -47,7 +47,10 @@ class GimbalBatch:
         self.world, self.phi_home, self.block = world, phi_home, block
         m = world.model
         worlds = [LinkWorld(share_model_of=world) for _ in range(block)]
-        self.batch = WorldBatch(worlds, [[] for _ in worlds], threads)
+        # The batch only sets states and computes kinematics: short C calls between
+        # Python that holds the GIL, so threads there cost more than they gave (measured
+        # with the rollout on two threads: a third slower).
+        self.batch = WorldBatch(worlds, [[] for _ in worlds], threads=1)
         self.sensor = BatchSensor(self.batch, [IrradianceSensor(w, noise=False)
                                                for w in worlds], steps=0)
         self._datas = [mujoco.MjData(m) for _ in range(threads)]
