@@ -17,6 +17,7 @@ import time
 
 import numpy as np
 
+from ledsim.cli.options import WORKERS
 from ledsim.config import LinkConstants
 from ledsim.loop.estimation import BANK_NOISE, REFERENCE_DISTANCE, bank_preset, noisier
 from ledsim.physics.scene import WorldConfig
@@ -34,9 +35,9 @@ def main() -> None:
     ap.add_argument("--bank", action="store_true",
                     help="train every member of the shipped bank (overrides the above)")
     ap.add_argument("--samples", type=int, default=200_000)
-    ap.add_argument("--threads", type=int, default=os.cpu_count() or 1,
-                    help="threads that generate the transitions (mujoco.rollout and the "
-                         "world batch; default: every core)")
+    ap.add_argument("--threads", type=WORKERS, default=min(os.cpu_count() or 1, 64),
+                    help="threads that step the transitions' physics (mujoco.rollout; "
+                         "default: every core)")
     args = ap.parse_args()
     if args.bank:
         args.distances, args.noise_scales = [REFERENCE_DISTANCE], list(BANK_NOISE)

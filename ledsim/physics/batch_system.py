@@ -12,7 +12,7 @@ and a sensor read through Python (about 80 us). Here:
   read by the vectorised :class:`BatchSensor` (rays only where a geom can block the
   beam).
 
-Both give the one-at-a-time numbers (``tests/test_batched.py``).
+Both give the one-at-a-time numbers (``tests/test_batch_system.py``).
 """
 
 from __future__ import annotations
@@ -33,7 +33,7 @@ class GimbalBatch:
     """Batched ``f`` and ``h`` of one :class:`GimbalSystem`'s world.
 
     Args:
-        world: the system's world (reset to its home pose is taken from it).
+        world: the system's world (its model is shared; not stepped here).
         phi_home: phi [rad] at gimbal angle 0.
         threads: threads for ``mujoco.rollout`` (the physics).
         block: worlds in the batch (states set and read per call).
@@ -55,10 +55,9 @@ class GimbalBatch:
                                                for w in worlds], steps=0)
         self._datas = [mujoco.MjData(m) for _ in range(threads)]
         self._rollout = rollout.Rollout(nthread=threads if threads > 1 else 0)
-        home = LinkWorld(share_model_of=world)
-        home.reset()
+        worlds[0].reset()  # the state every transition starts from, but the gimbal's
         self._home = np.empty(mujoco.mj_stateSize(m, FULL))
-        mujoco.mj_getState(m, home.data, self._home, FULL)
+        mujoco.mj_getState(m, worlds[0].data, self._home, FULL)
         self._iq = 1 + world._hinge_qpos  # state = (time, qpos, qvel, ...)
         self._iv = 1 + m.nq + world._hinge_dof
         self._substeps = world.config.substeps
