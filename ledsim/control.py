@@ -27,15 +27,6 @@ class ControlLaw(Protocol):
 
     def __call__(self, xhat: np.ndarray, t: float) -> float: ...
 
-    def batch(self, xhat: np.ndarray, t: float, rows: np.ndarray) -> np.ndarray:
-        """The law of N runs at once: ``xhat`` (N, 2), u for the ``rows`` it is asked
-        for (the others' state is left alone), with the single run's arithmetic."""
-        ...
-
-    def restart(self, row: int) -> None:
-        """Run ``row`` of a batch starts afresh (its state as :meth:`start` leaves it)."""
-        ...
-
     #: The law points the receiver at the beam, so a lost link is worth a scan to find
     #: it again (False for excitations, whose input is the experiment).
     tracks_beam: bool
@@ -68,11 +59,6 @@ class Excitation:
     def __call__(self, xhat: np.ndarray, t: float) -> float:
         return self.cos_amp * math.cos(self.omega * t) + self.sin_amp * math.sin(self.omega * t)
 
-    def batch(self, xhat: np.ndarray, t: float, rows: np.ndarray) -> np.ndarray:
-        return np.full(len(rows), self(xhat, t))
-
-    def restart(self, row: int) -> None:
-        pass
 
 
 @dataclass
@@ -89,11 +75,6 @@ class PaperRateDamping:
     def __call__(self, xhat: np.ndarray, t: float) -> float:
         return -self.gain * xhat[1]
 
-    def batch(self, xhat: np.ndarray, t: float, rows: np.ndarray) -> np.ndarray:
-        return -self.gain * xhat[rows, 1]
-
-    def restart(self, row: int) -> None:
-        pass
 
 
 @dataclass
@@ -144,18 +125,3 @@ class AlignmentPID:
         self.integral = min(max(self.integral + r * self.Te, -self.i_max), self.i_max)
         u = -self.kv * r - self.ki * self.integral
         return min(max(u, -self.u_max), self.u_max)
-
-    def batch(self, xhat: np.ndarray, t: float, rows: np.ndarray) -> np.ndarray:
-        if np.ndim(self.integral) == 0:  # one integral per run of the batch
-            self.integral = np.full(len(xhat), float(self.integral))
-        phi = np.clip(xhat[rows, 0], -self.domain[0], self.domain[0])
-        rate = np.clip(xhat[rows, 1], -self.domain[1], self.domain[1])
-        cmd = np.clip(-self.omega * (phi - self.phi_ref), -self.rate_max, self.rate_max)
-        r = rate - cmd
-        integral = np.clip(self.integral[rows] + r * self.Te, -self.i_max, self.i_max)
-        self.integral[rows] = integral
-        return np.clip(-self.kv * r - self.ki * integral, -self.u_max, self.u_max)
-
-    def restart(self, row: int) -> None:
-        if np.ndim(self.integral):
-            self.integral[row] = 0.0

@@ -181,48 +181,36 @@ class KKLObserver(Estimator):
             z_next = z_next + enc(f(xh, u)) - enc(f(xh, self.u_bar))
         self.z = z_next
 
-    # -- batched run over many trajectories ---------------------------------------------
+    # -- many trajectories of the autonomous observer ---------------------------------
 
-    def run_batch(self, ys: np.ndarray, us: np.ndarray | None = None,
-                  x0: np.ndarray | None = None, dtype=np.float64) -> np.ndarray:
-        """Estimates for ``B_traj`` trajectories at once.
+    def run_batch(self, ys: np.ndarray, x0: np.ndarray | None = None,
+                  dtype=np.float64) -> np.ndarray:
+        """Estimates for ``B_traj`` trajectories at once, at u = u_bar with every sample
+        present: the linear recursion z' = A z + B y first, then one large decode (what
+        :meth:`update` and :meth:`predict` give step by step, much faster).
 
         Args:
-            ys: measurements, shape ``(N, B_traj, p)``; non-finite entries are held.
-            us: inputs, shape ``(N, B_traj)`` or ``(N, B_traj, m)``; None means u = u_bar.
+            ys: measurements, shape ``(N, B_traj, p)``, all usable.
             x0: initial guesses, shape ``(B_traj, n)``; default the domain centre.
-            dtype: precision of the final decode on the input-free fast path (float32
-                is about twice as fast; z itself is always propagated in float64).
+            dtype: precision of the decode (float32 is about twice as fast; z itself is
+                always propagated in float64).
 
         Returns:
             x_hat, shape ``(N, B_traj, n)``.
         """
         ys = np.asarray(ys, dtype=float)
+        if not usable_mask(self.system, ys).all():
+            raise ObserverError("run_batch needs every sample usable: step a run with "
+                                "missing samples through update and predict")
         n_steps, n_traj, _ = ys.shape
         guess = self.system.domain_center if x0 is None else x0
         z = self.encode(np.broadcast_to(guess, (n_traj, self.system.n_state)))
-        usable = usable_mask(self.system, ys)
-        has_missing = not usable.all()
-        if us is None and not has_missing:
-            # Linear recursion first, then one large decode: the fast path.
-            zs = np.empty((n_steps, n_traj, self.q))
-            By = ys @ self.B.T
-            for k in range(n_steps):
-                zs[k] = z
-                z = self.eigenvalues * z + By[k]
-            decoder = self.decoder_T_star if dtype == np.float64 else \
-                self.decoder_T_star.astype(dtype)
-            flat = zs.reshape(-1, self.q).astype(dtype, copy=False)
-            return decoder(flat).astype(np.float64).reshape(n_steps, n_traj, -1)
-        out = np.empty((n_steps, n_traj, self.system.n_state))
+        zs = np.empty((n_steps, n_traj, self.q))
+        By = ys @ self.B.T
         for k in range(n_steps):
-            xh = self.decode(z)
-            out[k] = xh
-            y = ys[k]
-            if has_missing:
-                y = np.where(usable[k], y, self.system.h(xh))
-            z_next = self.eigenvalues * z + y @ self.B.T
-            if us is not None and self.omega:
-                z_next += self.omega_correction(z, us[k], xh)
-            z = z_next
-        return out
+            zs[k] = z
+            z = self.eigenvalues * z + By[k]
+        decoder = self.decoder_T_star if dtype == np.float64 else \
+            self.decoder_T_star.astype(dtype)
+        flat = zs.reshape(-1, self.q).astype(dtype, copy=False)
+        return decoder(flat).astype(np.float64).reshape(n_steps, n_traj, -1)

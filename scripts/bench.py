@@ -52,26 +52,6 @@ def step_cost(est, ys, repeats=3, u: float = 0.0) -> float:
     return float(np.median(times))
 
 
-def batched_step_cost(est, ys, u: float, n_traj: int = 1024, steps: int = 50) -> float:
-    """Seconds per trajectory-step of ``observer.batched`` copies of ``est`` (update and
-    predict with input ``u``), one core."""
-    from observer.batched import batched
-
-    b = batched(est, n_traj)
-    rng = np.random.default_rng(2)
-    yb = ys[rng.integers(0, len(ys), (steps, n_traj))]
-    uu = np.full(n_traj, u)
-    best = np.inf
-    for _ in range(2):
-        b.reset()
-        t0 = time.perf_counter()
-        for y in yb:
-            b.update(y)
-            b.predict(uu)
-        best = min(best, time.perf_counter() - t0)
-    return best / (steps * n_traj)
-
-
 def batched_throughput(obs, n_traj=1024, n_steps=200, dtype=np.float32) -> float:
     """Observer steps per second (trajectories x steps / s), one core."""
     rng = np.random.default_rng(0)
@@ -161,10 +141,11 @@ def rollout_speed(n_worlds: int, seconds: float = 5.0) -> float:
     return n_worlds * n_steps / substeps / best
 
 
-def batched_speed(n_worlds: int = 64, threads: int = 1, estimator: str = "kkl",
+def batched_speed(n_worlds: int = 16, threads: int = 1, estimator: str = "kkl",
                   supervision: bool = False, seconds: float = 2.0,
                   repeats: int = 2) -> tuple[float, float]:
-    """(closed-loop control steps per second of the batched loop, the same of
+    """(closed-loop control steps per second of the loop stepping ``n_worlds`` seeds
+    together, the same of
     ``mujoco.rollout`` stepping the same worlds open loop): align scenario, ``n_worlds``
     seeds, ``threads`` threads for both. The rollout starts from the batch's initial
     states and replays the torques the closed loop applied, so it does the same physics
@@ -172,21 +153,22 @@ def batched_speed(n_worlds: int = 64, threads: int = 1, estimator: str = "kkl",
     import mujoco
     from mujoco import rollout
 
-    from ledsim.loop.batched import BatchedClosedLoop
+    from ledsim.loop.closed_loop import ClosedLoop
     from ledsim.loop.config import RunConfig
 
     cfg = RunConfig(scenario="align", estimator=estimator, supervision=supervision,
                     seconds=seconds)
     best, best_roll = np.inf, np.inf
     for _ in range(repeats):
-        loop = BatchedClosedLoop(cfg, range(n_worlds), threads)
+        loop = ClosedLoop(cfg, range(n_worlds), threads)
+        worlds = [r.world for r in loop.runs]
         full = mujoco.mjtState.mjSTATE_FULLPHYSICS
-        m = loop.batch.worlds[0].model
-        x0 = np.stack([_state(w, full) for w in loop.batch.worlds])
+        m = worlds[0].model
+        x0 = np.stack([_state(w, full) for w in worlds])
         t0 = time.perf_counter()
         outs = loop.run(keep_trace=True)
         best = min(best, time.perf_counter() - t0)
-        sub = loop.batch.worlds[0].config.substeps
+        sub = worlds[0].config.substeps
         ctrl = np.repeat(np.stack([o.trace.torque for o in outs]), sub, axis=1)[..., None]
         data = [mujoco.MjData(m) for _ in range(threads)]
         with rollout.Rollout(nthread=threads if threads > 1 else 0) as r:
@@ -337,25 +319,7 @@ def main() -> None:
               "input, Omega adds two encoder passes and two model steps, and the advantage "
               f"shrinks to {costs['ekf'] / omega:.1f}x (UKF: {costs['ukf'] / omega:.1f}x). "
               "Both baselines are Python on 2x2 matrices: their cost is call overhead, not "
-              "arithmetic, so a vectorised filter over many trajectories would close most "
-              "of the gap (next table). In the closed loop the estimator is a minority of "
-              "the step."]
-    batch_cost = {}
-    for name, est, u in [("kkl", kkl, 0.0), ("kkl with Omega (u != 0)", kkl, 0.5),
-                         ("ekf", ExtendedKalmanFilter(system), 0.5),
-                         ("ukf", UnscentedKalmanFilter(system), 0.5)]:
-        batch_cost[name] = batched_step_cost(est, ys, u)
-    lines += ["", "## One observer step, vectorised over 1024 trajectories (float64)", "",
-              "`observer.batched` (the same filters, one (N, ...) array each).", "",
-              "| estimator | us per trajectory-step | relative to KKL with Omega |",
-              "|---|---|---|"]
-    ref = batch_cost["kkl with Omega (u != 0)"]
-    for name, c in batch_cost.items():
-        lines.append(f"| {name} | {1e6 * c:.2f} | {c / ref:.2f}x |")
-    lines += ["", "Batched, the Kalman filters' Python overhead is gone and their "
-              "arithmetic on 2x2 matrices is cheap: the KKL keeps an advantage only "
-              "without input (a linear filter and one decoder pass); with Omega its two "
-              "encoder passes cost more than an EKF or UKF step."]
+              "arithmetic. In the closed loop the estimator is a minority of the step."]
     thr32 = batched_throughput(kkl, dtype=np.float32)
     thr64 = batched_throughput(kkl, dtype=np.float64)
     lines += ["", "## Batched KKL (1024 trajectories x 200 steps, one core)", "",
@@ -377,16 +341,18 @@ def main() -> None:
     roll = rollout_speed(n_roll)
     lines += ["", f"`mujoco.rollout` of {n_roll} worlds, physics only, open loop, one "
               f"thread: {roll:.3g} control steps / s."]
-    n_batch = 64
+    n_batch = 16
     batch_rows = {}
     for est, sup in (("oracle", False), ("kkl", False), ("ekf", False), ("ukf", False),
                      ("kkl", True)):
         for threads in (1, 2):
             batch_rows[est, sup, threads] = batched_speed(n_batch, threads, est, sup)
-    lines += ["", f"## Batched closed loop ({n_batch} worlds, align scenario, 2 s)", "",
-              "`ledsim.loop.batched`: the worlds step together (one `MjData` each, "
-              "split over the threads), the sensor, gate, law and estimator run on "
-              "(N, ...) arrays. The floor beside it is `mujoco.rollout` stepping the same "
+    lines += ["", f"## Many seeds stepped together ({n_batch} worlds, align scenario, 2 s)",
+              "", "`ledsim.loop.closed_loop.ClosedLoop`: each seed runs the one control step "
+              "(its own sensor, gate, supervisor, estimator and law: every seed's numbers "
+              "are its single run's, bit for bit), and the physics of all worlds is "
+              "split over the threads (one `MjData` each, MuJoCo without the GIL). The "
+              "floor beside it is `mujoco.rollout` stepping the same "
               "worlds open loop, from the same states with the torques the loop applied, "
               "on as many threads, measured in the same call.", "",
               "| estimator | supervision | threads | closed-loop steps / s "
@@ -395,11 +361,12 @@ def main() -> None:
         lines.append(f"| {est} | {'on' if sup else 'off'} | {threads} | {b:.3g} | {r:.3g} "
                      f"| {b / r:.2f} |")
     head_b, head_r = batch_rows["kkl", False, 1]
-    lines += ["", "With supervision every run keeps its own supervisor and estimator in "
-              "Python (the bank of KKLs, the acquisition scans), so the batch only "
-              "shares the physics and the sensor. Without it the KKL's cost is its "
-              "arithmetic: a 750-unit decoder and, with an input, two passes of a "
-              "500-unit encoder per step (Omega), about 10 us per world-step in float64."]
+    lines += ["", "Only the physics runs in parallel: the sensor, the supervisor and the "
+              "estimator of every seed are Python under the GIL, so two threads gain "
+              "little. The estimators are not vectorised over seeds: doing so changed a "
+              "seed's numbers with the batch it ran in (round-off that a chaotic run "
+              "grows to radians), and the same command gave different numbers for "
+              "different `--workers`."]
     lines += ["", "## Closed loop in MuJoCo (align scenario, 10 s, one core)", "",
               "| estimator | real-time factor of the loop | over the physics floor "
               "| us per step | estimator us / step |", "|---|---|---|---|---|"]
@@ -458,7 +425,7 @@ def main() -> None:
             "floor_ratio_single": loop["kkl"][0] / bare_rtf,
             "kkl_over_ekf_loop_speed": loop["kkl"][0] / loop["ekf"][0],
             "rollout_steps_per_s": roll, "rollout_worlds": n_roll,
-            # KKL without supervision, one thread, 64 worlds, against mujoco.rollout.
+            # KKL without supervision, one thread, 16 worlds, against mujoco.rollout.
             "batched_steps_per_s": head_b, "floor_ratio_batched": head_b / head_r,
             "batched_rollout_steps_per_s": head_r, "batched_worlds": n_batch,
             "batched": [{"estimator": e, "supervision": s, "threads": t,

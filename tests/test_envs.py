@@ -87,3 +87,45 @@ def test_estimator_wrapper_adds_a_lost_flag_that_a_kick_raises():
     assert set(flags) <= {0.0, 1.0}
     assert not flags[100:150].any() and flags[150:].any()
     env.close()
+
+
+def test_the_shipped_policy_is_ledsim_runs_stack(tmp_path):
+    """reset(seed=K) starts as seed K of ``ledsim run --scenario align`` and the shipped
+    policy then acts as ``ledsim run --estimator kkl`` (supervision, bank, scan): the
+    trace that ``--save-trace`` writes is the episode's, to 1e-9."""
+    from conftest import run_cli
+
+    dist = "vibration:frequency=3,torque=0.3"
+    r = run_cli("run", "--scenario", "align", "--estimator", "kkl", "--disturbance", dist,
+                "--seeds", "2", "--workers", "1", "--seconds", "6", "--no-plot", "-q",
+                "--save-trace", "--out", str(tmp_path / "o"))
+    assert r.returncode == 0, r.stderr
+    trace = np.load(tmp_path / "o" / "trace_seed1.npz")
+    assert set(trace.files) == {"t", "phi", "phidot", "phi_hat", "phidot_hat", "p1", "p2",
+                                "torque", "lost"}
+    assert all(trace[k].ndim == 1 and len(trace[k]) == 600 for k in trace.files)
+    env = gym.make(ENV_ID, scenario="align", disturbances=[dist])
+    policy = ShippedAlignmentPolicy(env.unwrapped)
+    obs, info = env.reset(seed=1)
+    phi, p1, lost = [info["phi"]], [obs[0]], []
+    for _ in range(599):
+        obs, _, _, _, info = env.step(policy(obs))
+        lost.append(policy.lost)
+        phi.append(info["phi"])
+        p1.append(obs[0])
+    np.testing.assert_allclose(phi, trace["phi"], rtol=0, atol=1e-9)
+    np.testing.assert_allclose(p1, trace["p1"], rtol=0, atol=1e-9)
+    np.testing.assert_array_equal(lost, trace["lost"][:599])
+    # The policy restarts with the next episode by itself.
+    obs, info = env.reset(seed=1)
+    assert policy(obs).shape == (1,) and policy.step.decision is not None
+    env.close()
+
+
+@pytest.mark.parametrize("action", [np.array([np.nan]), np.array([0.1, 0.2]),
+                                    np.array([np.inf])])
+def test_a_bad_action_is_refused_in_one_line(action):
+    env = gym.make(ENV_ID).unwrapped
+    env.reset(seed=0)
+    with pytest.raises(ValueError, match="one finite number"):
+        env.step(action)

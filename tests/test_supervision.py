@@ -169,9 +169,10 @@ def test_the_bank_holds_a_far_link_with_its_noisier_member():
     from ledsim.loop.closed_loop import ClosedLoop
 
     loop = ClosedLoop(RunConfig(estimator="kkl", distance=0.2), 0)
-    out = loop.run()
+    out = loop.run()[0]
     assert out.metrics.availability > 0.8
-    assert loop.estimator.noise_ratios[loop.estimator.active] == 6.0
+    bank = loop.runs[0].step.estimator
+    assert bank.noise_ratios[bank.active] == 6.0
 
 
 def test_cli_run_writes_loss_and_recovery_times(tmp_path):

@@ -167,6 +167,9 @@ def build_parser() -> argparse.ArgumentParser:
                     help="f used by the KKL's Omega correction")
     rn.add_argument("--workers", type=WORKERS, default=2, help="processes")
     rn.add_argument("--no-plot", action="store_true", help="skip run.png")
+    rn.add_argument("--save-trace", action="store_true",
+                    help="also write trace_seed<K>.npz per seed: t, phi, phidot, phi_hat, "
+                         "phidot_hat, p1, p2, torque, lost (SI units, one row per step)")
     rn.add_argument("--out", required=True, help="output folder")
 
     rd = command("render", "render a closed-loop run to an H.264 mp4 (headless)")

@@ -71,16 +71,19 @@ def simulate(args) -> int:
 
 
 def run(args) -> int:
-    from ..loop.report import TABLE_HEADER, format_summary, run_many, write_run
+    from ..loop.report import TABLE_HEADER, format_summary, run_seeds, write_run, write_traces
 
     cfg = _loop_config(args, torque_limit=args.torque_limit, noise_scale=args.noise_scale,
                        seeds=args.seeds, particles=args.particles,
                        checkpoint=args.checkpoint, omega_model=args.omega_model,
                        workers=args.workers, seconds=args.seconds)
     out = check_out_dir(args.out)
-    summary, trace = run_many(cfg, progress=not args.quiet)
+    summary, outs = run_seeds(cfg, progress=not args.quiet, all_traces=args.save_trace)
     with output_folder(out) as tmp:
-        paths = [out / p.name for p in write_run(summary, trace, tmp, plot=not args.no_plot)]
+        written = write_run(summary, outs[0].trace, tmp, plot=not args.no_plot)
+        if args.save_trace:
+            written += write_traces(outs, tmp)
+        paths = [out / p.name for p in written]
     print(TABLE_HEADER)
     print(format_summary(summary))
     log.info(f"wrote {', '.join(str(p) for p in paths)}")

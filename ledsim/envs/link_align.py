@@ -1,7 +1,10 @@
 """``ledsim/LinkAlign-v0``: two photodiode powers in, gimbal torque out.
 
-The receiver gimbal on the AUV starts misaligned by up to ``phi0_range`` and must be
-turned onto the LED beam, under the chosen disturbances, from the photodiode powers alone.
+The receiver gimbal on the AUV starts misaligned and must be turned onto the LED beam,
+under the chosen disturbances, from the photodiode powers alone. The world is
+``ledsim run``'s: the same start, sensor noise, disturbances and physics tick, so with
+``scenario="align"`` the episode of ``reset(seed=K)`` is seed K of
+``ledsim run --scenario align`` until the actions differ.
 
 **Observation** (``Box(-inf, inf, (2,), float64)``)
 
@@ -20,33 +23,41 @@ idx  action                                           unit
 0    gimbal motor torque / ``torque_limit``           -
 ===  ===============================================  =====
 
+A float64 action is applied in full precision (the shipped policy relies on it).
+
 **Reward**: the noise-free power of photodiode 1 divided by its peak (0..1): the share of
 the best possible link quality received this step. **Episode**: never terminates (a lost
 link can be found again); truncated after 1000 steps (10 s) by ``gymnasium.make``.
-``info`` holds the true state (``phi`` [rad], ``phidot`` [rad/s]) and the noise-free
-powers, for evaluation only.
+``info`` holds the true state (``phi`` [rad], ``phidot`` [rad/s]), the noise-free
+powers and the time [s], for evaluation only.
 """
 
 from __future__ import annotations
+
+from dataclasses import replace
 
 import gymnasium as gym
 import numpy as np
 from gymnasium import spaces
 
-from observer.supervision import ResidualMonitor
-
 from ..config import LinkConstants
+from ..loop.closed_loop import control_step, identified_model, run_supervisor, start_world
+from ..loop.config import RunConfig
+from ..loop.gate import DropoutGate
 from ..optics import peak_power
-from ..physics.disturbances import parse_disturbance
-from ..physics.scene import WorldConfig
-from ..physics.sensor import IrradianceSensor
+from ..physics.sensor import SensorReading
 from ..physics.system import GimbalSystem
+from ..physics.tick import advance
+from ..step import GimbalMotor
 
 
 class LinkAlignEnv(gym.Env):
     """Keep the receiver aligned on the LED beam (see the module docstring).
 
     Args:
+        scenario: a scenario of ``ledsim run`` (``align``, ...): ``reset(seed=K)`` starts
+            as seed K of ``ledsim run --scenario`` does. None: the initial misalignment
+            is drawn uniformly in +-``phi0_range``, and the run's seed from ``seed``.
         distance: link distance d [m].
         noise_scale: multiplies the measurement-noise standard deviation [-].
         disturbances: disturbance specs ``name[:key=value,...]`` (``ledsim run`` syntax).
@@ -62,65 +73,85 @@ class LinkAlignEnv(gym.Env):
 
     metadata = {"render_modes": ["rgb_array"], "render_fps": 100}
 
-    def __init__(self, distance: float = 0.085, noise_scale: float = 1.0,
-                 disturbances: tuple[str, ...] = (), torque_limit: float = 0.05,
-                 frame_skip: int = 5, phi0_range: float = 0.3, render_mode: str | None = None,
-                 width: int = 640, height: int = 480, camera: str = "side",
-                 integrator: str = "implicitfast", scene: str | None = None):
+    def __init__(self, scenario: str | None = None, distance: float = 0.085,
+                 noise_scale: float = 1.0, disturbances: tuple[str, ...] = (),
+                 torque_limit: float = 0.05, frame_skip: int = 5, phi0_range: float = 0.3,
+                 render_mode: str | None = None, width: int = 640, height: int = 480,
+                 camera: str = "side", integrator: str = "implicitfast",
+                 scene: str | None = None):
         if render_mode not in (None, "rgb_array"):
             raise ValueError(f"render_mode={render_mode!r}: use None or 'rgb_array'")
         if int(frame_skip) < 1:
             raise ValueError(f"frame_skip={frame_skip!r}: must be >= 1")
-        constants = LinkConstants(distance=distance, Te=0.002 * int(frame_skip))
-        extra = {} if scene is None else {"xml": scene}
-        self.system = GimbalSystem(WorldConfig(constants=constants, torque_limit=torque_limit,
-                                               integrator=integrator, **extra))
+        if isinstance(disturbances, str):
+            disturbances = (disturbances,)
+        self.cfg = RunConfig(scenario=scenario or "align", disturbances=tuple(disturbances),
+                             distance=distance, torque_limit=torque_limit,
+                             noise_scale=noise_scale, integrator=integrator, scene=scene)
+        self.cfg.validate()
+        world_config = self.cfg.world_config()
+        Te = world_config.timestep * int(frame_skip)
+        if Te != world_config.constants.Te:
+            world_config = replace(world_config, constants=LinkConstants(distance=distance,
+                                                                          Te=Te))
+        self.system = GimbalSystem(world_config)
         self.world = self.system.world
+        self.model, self.data = self.world.model, self.world.data
+        self.dt = self.system.Te
+        self.random_start = scenario is None
         self.noise_scale = noise_scale
-        self.disturbance_specs = tuple(disturbances)
-        self.disturbances = [parse_disturbance(d) for d in self.disturbance_specs]
+        self.disturbance_specs = self.cfg.disturbances
         self.torque_limit = torque_limit
         self.phi0_range = phi0_range
-        self.peak = peak_power(constants)
+        self.peak = peak_power(self.system.constants)
         self.render_mode = render_mode
-        self.metadata = {**self.metadata, "render_fps": int(round(1.0 / constants.Te))}
+        self.metadata = {**self.metadata, "render_fps": int(round(1.0 / self.dt))}
         self._render_args = (width, height, camera)
         self._recorder = None
         self.observation_space = spaces.Box(-np.inf, np.inf, (2,), np.float64)
         self.action_space = spaces.Box(-1.0, 1.0, (1,), np.float32)
         self.sensor = None
-        self._reading = None
+        self.disturbances: list = []
+        self.reading: SensorReading | None = None
+        self.run_seed: int | None = None
+        self.episode = 0  # resets so far (a policy restarts when it changes)
+        self.k = 0  # control steps of this episode
+        self.start_gimbal_angle = 0.0
 
     def _observe(self):
-        self.world.forward_kinematics()
-        self._reading = self.sensor.read()
-        r = self._reading
+        r = self.reading = self.sensor.read()
         info = {"phi": r.phi, "phidot": r.phidot, "power_clean": r.power_clean.copy(),
-                "time": self.world.time}
+                "time": self.k * self.dt}
         return r.power.astype(np.float64), info
 
     def reset(self, *, seed: int | None = None, options: dict | None = None):
         super().reset(seed=seed)
-        phi0 = float(self.np_random.uniform(-self.phi0_range, self.phi0_range))
-        self.world.reset(gimbal_angle=self.system.phi_home - phi0)
-        run_seed = int(self.np_random.integers(2**31))
-        self.sensor = IrradianceSensor(self.world, seed=run_seed, noise_scale=self.noise_scale)
-        for d in self.disturbances:
-            d.reset(run_seed)
+        x0 = None
+        if self.random_start:
+            x0 = (float(self.np_random.uniform(-self.phi0_range, self.phi0_range)), 0.0)
+        if seed is None or self.random_start:
+            self.run_seed = int(self.np_random.integers(2**31))
+        else:
+            self.run_seed = int(seed)
+        self.sensor, self.disturbances = start_world(self.cfg, self.system, self.world,
+                                                     self.run_seed, x0)
+        self.start_gimbal_angle = self.world.gimbal_angle
+        self.k = 0
+        self.episode += 1
         return self._observe()
 
     def step(self, action):
         if self.sensor is None:
             raise RuntimeError("call reset() before step()")
-        a = float(np.clip(np.asarray(action, dtype=float).reshape(-1)[0], -1.0, 1.0))
-        t = self.world.time
-        self.world.clear_hull_wrench()
-        for d in self.disturbances:
-            d.apply(self.world, t)
-        self.world.set_torque(a * self.torque_limit)
-        self.world.step()
+        a = np.asarray(action, dtype=float).reshape(-1)
+        if a.size != 1 or not np.isfinite(a[0]):
+            raise ValueError(f"action {action!r} is not allowed: one finite number in "
+                             "[-1, 1]")
+        a = min(max(float(a[0]), -1.0), 1.0)
+        self.k += 1
+        advance(self.world, self.disturbances, a * self.torque_limit, self.k * self.dt)
         obs, info = self._observe()
-        reward = float(self._reading.power_clean[0] / self.peak)
+        reward = float(self.reading.power_clean[0] / self.peak)
         return obs, reward, False, False, info
 
     def render(self):
@@ -132,9 +163,9 @@ class LinkAlignEnv(gym.Env):
             w, h, cam = self._render_args
             self._recorder = FrameRecorder(self.world, w, h, self.metadata["render_fps"], cam,
                                            label="LinkAlign-v0")
-        r = self._reading
+        r = self.reading
         self._recorder.overlay.push(r.phi, r.phi, r.power[0], r.power[1])
-        return self._recorder.render(self.world.time, r)
+        return self._recorder.render(self.k * self.dt, r)
 
     def close(self):
         if self._recorder is not None:
@@ -142,87 +173,114 @@ class LinkAlignEnv(gym.Env):
             self._recorder = None
 
 
-class EstimatorObservation(gym.ObservationWrapper):
-    """Adds an estimator's output to the observation: (P1 [W], P2 [W], phi_hat [rad],
-    phidot_hat [rad/s]), and with ``lost_flag`` a fifth entry, 1.0 when the residual
-    monitor of ``ledsim run`` (:class:`observer.supervision.ResidualMonitor`) does not
-    trust the estimate, else 0.0. The estimator runs behind the same dropout gate as
-    ``ledsim run``, and is told the applied acceleration each step."""
-
-    def __init__(self, env: LinkAlignEnv, estimator: str = "kkl", lost_flag: bool = False):
-        super().__init__(env)
-        self.policy = ShippedAlignmentPolicy(env.unwrapped, estimator)
-        self.lost_flag = lost_flag
-        self.observation_space = spaces.Box(-np.inf, np.inf, (5 if lost_flag else 4,),
-                                            np.float64)
-
-    def reset(self, **kw):
-        self.policy.reset()
-        return super().reset(**kw)
-
-    def step(self, action):
-        self.policy.last_action = float(np.asarray(action).reshape(-1)[0])
-        return super().step(action)
-
-    def observation(self, obs):
-        parts = [obs, self.policy.estimate(obs)]
-        if self.lost_flag:
-            parts.append([float(self.policy.lost)])
-        return np.concatenate(parts)
+def torque_action(torque: float, limit: float) -> float:
+    """The action in [-1, 1] whose ``action * limit`` is ``torque`` [N m] to the last
+    bit where one exists (so the environment applies what ``ledsim run`` applies)."""
+    a = torque / limit
+    for cand in (a, np.nextafter(a, np.inf), np.nextafter(a, -np.inf)):
+        if float(cand) * limit == torque:
+            a = float(cand)
+            break
+    return min(max(a, -1.0), 1.0)
 
 
 class ShippedAlignmentPolicy:
-    """The shipped observer and alignment controller of ``ledsim run`` as a policy:
-    ``action = policy(observation)`` on :class:`LinkAlignEnv` (default frame_skip)."""
+    """``ledsim run``'s stack as a policy on :class:`LinkAlignEnv`: the dropout gate, the
+    estimator under link supervision (the KKL bank, acquisition scans), the scenario's
+    control law and the warm-up hold, through the same
+    :class:`~ledsim.step.ControlStep`. ``action = policy(observation)``; it starts
+    afresh with each episode of the environment.
+
+    Args:
+        env: the (unwrapped) environment.
+        estimator: ``kkl``, ``ekf``, ``ukf``, ``pf`` or ``oracle``.
+    """
 
     def __init__(self, env: LinkAlignEnv, estimator: str = "kkl"):
-        from ..control import AlignmentPID
-        from ..estimators import build_estimator
-        from ..loop.closed_loop import identified_model
-        from ..loop.gate import DropoutGate
-        from ..resources import require_shipped_checkpoint
+        self.env = env.unwrapped if hasattr(env, "unwrapped") else env
+        self.cfg = replace(self.env.cfg, estimator=estimator)
+        self.cfg.validate()
+        self.step = None
+        self._episode = None
 
-        system = env.system
-        c = system.constants
-        ckpt = require_shipped_checkpoint(c.distance, "mujoco") if estimator == "kkl" else None
-        self.env = env
-        # Fitted on a world of its own: fitting sets and steps MuJoCo's state.
-        model = identified_model(GimbalSystem(system.config))
-        self.estimator = build_estimator(estimator, system, model=model, checkpoint=ckpt)
-        self.law_template = AlignmentPID()
-        self.gate = DropoutGate(c)
-        self.monitor = ResidualMonitor(model)
-        self.warmup_steps = int(round(1.0 / c.Te))
-        self.reset()
+    def _truth(self) -> np.ndarray:
+        r = self.env.reading
+        return np.array([r.phi, r.phidot])
 
     def reset(self) -> None:
-        self.estimator.reset()
-        self.gate.reset()
-        self.monitor = ResidualMonitor(self.monitor.system)
-        self.lost = False
-        self.law = self.law_template.start(self.env.system.constants)
-        self.k = 0
-        self.last_action = 0.0
-        self._xhat = None
+        """Start afresh at the next call (the policy also does so by itself when the
+        environment starts a new episode)."""
+        self._episode = None
 
-    def estimate(self, obs) -> np.ndarray:
-        """Take the measurement of this step; returns x_hat (phi [rad], phidot [rad/s])."""
-        if self._xhat is not None:  # the previous step's input moves the estimator on
-            u = -self.last_action * self.env.torque_limit / self.env.system.inertia
-            self.estimator.predict(u)
-        y = self.gate(np.asarray(obs, dtype=float)[:2])
-        self._xhat = self.estimator.update(y)
-        self.lost = self.monitor.update(y, self._xhat)
-        return self._xhat
+    def _start(self) -> None:
+        env = self.env
+        # Fitted on a world of its own: fitting sets and steps MuJoCo's state.
+        model = identified_model(GimbalSystem(env.system.config))
+        self.step = control_step(self.cfg, env.system, model, env.run_seed,
+                                 env.start_gimbal_angle, self._truth)
+        self._episode = env.episode
+
+    @property
+    def lost(self) -> bool:
+        """The supervisor does not trust the estimate (last step)."""
+        return bool(self.step is not None and self.step.decision.lost)
 
     def __call__(self, obs) -> np.ndarray:
-        xhat = self.estimate(obs)
-        self.k += 1
-        if self.k <= self.warmup_steps:  # let the estimator forget its initial guess
-            action = 0.0
-        else:
-            u = self.law(xhat, self.k * self.env.system.constants.Te)
-            torque = float(self.env.system.torque_for(u))
-            action = float(np.clip(torque / self.env.torque_limit, -1.0, 1.0))
-        self.last_action = action
-        return np.array([action], dtype=np.float32)
+        env = self.env
+        if self._episode != env.episode:
+            self._start()
+        r = env.reading
+        torque = self.step(np.asarray(obs, dtype=float)[:2], env.k * env.dt,
+                           r.gimbal_angle, r.gimbal_rate)
+        return np.array([torque_action(torque, env.torque_limit)])
+
+
+class EstimatorObservation(gym.ObservationWrapper):
+    """Adds an estimator's output to the observation: (P1 [W], P2 [W], phi_hat [rad],
+    phidot_hat [rad/s]), and with ``lost_flag`` a fifth entry, 1.0 when the link
+    supervisor of ``ledsim run`` does not trust the estimate, else 0.0. The estimator
+    runs behind the same dropout gate and supervisor as in ``ledsim run`` (without the
+    acquisition scan: the agent has the motor), and is told the acceleration the
+    agent's torque commands each step."""
+
+    def __init__(self, env, estimator: str = "kkl", lost_flag: bool = False):
+        super().__init__(env)
+        base = env.unwrapped
+        self.cfg = replace(base.cfg, estimator=estimator)
+        self.cfg.validate()
+        self.lost_flag = lost_flag
+        self.observation_space = spaces.Box(-np.inf, np.inf, (5 if lost_flag else 4,),
+                                            np.float64)
+        self.supervisor = None
+        self.decision = None
+
+    @property
+    def lost(self) -> bool:
+        return bool(self.decision is not None and self.decision.lost)
+
+    def reset(self, **kw):
+        obs, info = self.env.reset(**kw)
+        base = self.env.unwrapped
+        model = identified_model(GimbalSystem(base.system.config))
+        self.gate = DropoutGate(base.system.constants)
+        self.motor = GimbalMotor(base.system.inertia)
+        self.supervisor = run_supervisor(
+            self.cfg, base.system, model, base.run_seed,
+            lambda: np.array([base.reading.phi, base.reading.phidot]), reacquire=False)
+        return self.observation(obs), info
+
+    def step(self, action):
+        base = self.env.unwrapped
+        a = min(max(float(np.asarray(action, dtype=float).reshape(-1)[0]), -1.0), 1.0)
+        self.supervisor.predict(self.motor.acceleration(a * base.torque_limit))
+        return super().step(action)
+
+    def observation(self, obs):
+        base = self.env.unwrapped
+        r = base.reading
+        self.decision = self.supervisor.step(base.k * base.dt, self.gate(obs[:2]),
+                                             r.gimbal_angle, r.gimbal_rate)
+        parts = [obs, self.decision.xhat]
+        if self.lost_flag:
+            parts.append([float(self.decision.lost)])
+        return np.concatenate(parts)

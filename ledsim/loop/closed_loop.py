@@ -1,28 +1,35 @@
-"""The loop closed in physics: one run of :class:`ClosedLoop`.
+"""The loop closed in physics: one seed or many, through the one control step.
 
-MuJoCo supplies the true angle, the ray sensor the two powers, the dropout gate marks
-occluded samples missing, an estimator (KKL, EKF, UKF, PF, or the oracle that is handed
-the true state) turns them into x_hat, and the scenario's control law torques the gimbal.
+MuJoCo supplies the true angle, the ray sensor the two powers, and each seed's
+:class:`~ledsim.step.ControlStep` (dropout gate, supervisor with its estimator, control
+law, motor) turns them into a motor torque; :func:`~ledsim.physics.tick.advance` moves
+the world on. :class:`ClosedLoop` steps the runs of several seeds together, their
+physics split over threads (MuJoCo steps without the GIL); a run of one seed is the
+same code with N = 1, so a seed's numbers are the same whatever else runs beside it.
 Every run of a seed sees the same sensor-noise draws and disturbances whatever the
 estimator.
 """
 
 from __future__ import annotations
 
+import sys
 import time
-from collections.abc import Callable
-from dataclasses import dataclass
+from collections.abc import Callable, Sequence
+from concurrent.futures import ThreadPoolExecutor
 
 import numpy as np
+from tqdm.auto import tqdm
 
-from ..control import intensity_maximum
-from ..optics import peak_power, receiver_response, transmitter_gain
+from observer.oracle import Oracle
+
+from ..optics import peak_power
 from ..physics.disturbances import parse_disturbance
 from ..physics.sensor import IrradianceSensor, SensorReading
-from ..physics.simulation import simulate
+from ..physics.simulation import SimulationResult
 from ..physics.system import GimbalSystem
+from ..physics.tick import advance, prepare
 from ..physics.world import LinkWorld
-from ..results import DictAccess
+from ..step import ControlStep, GimbalMotor, Unsupervised
 from .config import RunConfig
 from .estimation import (  # noqa: F401 (re-exported)
     check_checkpoint,
@@ -31,64 +38,22 @@ from .estimation import (  # noqa: F401 (re-exported)
     loop_estimator,
 )
 from .gate import DropoutGate
-from .metrics import RunMetrics, run_metrics
+from .outcome import RunOutcome, Trace, achievable_power, outcome  # noqa: F401
 from .supervisor import LinkSupervisor
 
-#: Encoder hold during the warm-up: PD on the gimbal angle, 10 rad/s bandwidth,
-#: gains in units of the hinge inertia (1/s^2, 1/s).
-HOLD_GAINS = (100.0, 20.0)
 
-
-@dataclass
-class Trace(DictAccess):
-    """Time series of one run, one row per control step.
-
-    Attributes:
-        t [s]; x, xhat: true and estimated (phi [rad], phidot [rad/s]); power,
-        power_clean (N, 2) [W]; torque [N m]; occluded (N, 2): any aperture ray blocked;
-        lost (N,): the supervisor did not trust the estimate; acquiring (N,): its
-        acquisition scan had the motor.
-    """
-
-    t: np.ndarray
-    x: np.ndarray
-    xhat: np.ndarray
-    power: np.ndarray
-    power_clean: np.ndarray
-    torque: np.ndarray
-    occluded: np.ndarray
-    lost: np.ndarray | None = None
-    acquiring: np.ndarray | None = None
-
-
-@dataclass
-class RunOutcome(DictAccess):
-    """One seed: its metrics, the estimator's cost [us per step], the loop's real-time
-    factor [-], and the trace when asked for."""
-
-    metrics: RunMetrics
-    us_per_step: float
-    realtime_factor: float
-    trace: Trace | None = None
-
-
-def achievable_power(res, c) -> np.ndarray:
-    """Most photodiode 1 could receive at each step of ``res`` [W]: the transmitter gain
-    of that moment's distance and LED angle, times the receiver's peak response."""
-    g_max = float(receiver_response(intensity_maximum(c), c.receiver))
-    return transmitter_gain(res.distance[:, 0], res.emission_angle[:, 0], c) * g_max
-
-
-def start_world(cfg: RunConfig, system: GimbalSystem, world: LinkWorld, seed: int
-                ) -> tuple[IrradianceSensor, list]:
-    """Put ``world`` in the scenario's initial state and give it the run's sensor and
+def start_world(cfg: RunConfig, system: GimbalSystem, world: LinkWorld, seed: int,
+                x0: tuple[float, float] | None = None) -> tuple[IrradianceSensor, list]:
+    """Put ``world`` in the scenario's initial state (or the true state ``x0``: phi
+    [rad], phidot [rad/s]), ready for step 0, and give it the run's sensor and
     disturbances, both seeded with ``seed``."""
-    x0 = cfg.scenario_spec.x0
+    x0 = cfg.scenario_spec.x0 if x0 is None else x0
     world.reset(gimbal_angle=system.phi_home - x0[0], gimbal_rate=0.0 - x0[1])
     sensor = IrradianceSensor(world, seed=seed, noise_scale=cfg.noise_scale)
     disturbances = [parse_disturbance(d) for d in cfg.disturbances]
     for d in disturbances:
         d.reset(seed)
+    prepare(world, disturbances, world.time)
     return sensor, disturbances
 
 
@@ -102,115 +67,166 @@ def make_supervisor(cfg: RunConfig, system: GimbalSystem, estimator, estimator_s
                           gain_ratio=prior, noise_ratio=cfg.noise_scale / prior)
 
 
-def hold_torque(inertia: float, q, qdot, q_hold) -> float | np.ndarray:
-    """Motor torque [N m] of the warm-up: while the estimator converges, the motor only
-    holds its own encoder angle ``q_hold`` [rad] (PD, :data:`HOLD_GAINS`)."""
-    return -HOLD_GAINS[0] * inertia * (q - q_hold) - HOLD_GAINS[1] * inertia * qdot
+def run_supervisor(cfg: RunConfig, system: GimbalSystem, model, seed: int,
+                   truth: Callable[[], np.ndarray], reacquire: bool):
+    """The estimator of seed ``seed`` of ``cfg`` under its supervisor (the oracle, which
+    reads ``truth``, and runs without supervision are :class:`Unsupervised`);
+    ``reacquire``: the supervisor may scan for a lost beam."""
+    if cfg.estimator == "oracle":
+        return Unsupervised(Oracle(system, truth))
+    est, est_system = loop_estimator(cfg, system, model)
+    est.seed_run(seed)
+    est.reset()
+    if not cfg.supervision:
+        return Unsupervised(est)
+    return make_supervisor(cfg, system, est, est_system, reacquire)
 
 
-def outcome(res, xhat: np.ndarray, flags: np.ndarray, cfg: RunConfig, constants,
-            disturbances, supervised: bool, spent: float, wall: float,
-            keep_trace: bool) -> RunOutcome:
-    """A run's :class:`RunOutcome` from its simulation result, its estimates, its
-    (lost, acquiring) flags per step, and the seconds spent controlling and in all."""
-    events = [d for d in disturbances if d.event_end is not None]
-    flags = flags.reshape(-1, 2)
-    metrics = run_metrics(res.x, xhat, res.power_clean, cfg.scenario_spec.steady_from,
-                          constants, events[0].event_end if events else None,
-                          lost=flags[:, 0] if supervised else None,
-                          event_start=events[0].start if events else None,
-                          power_max=achievable_power(res, constants))
-    trace = Trace(res.t, res.x, xhat, res.power, res.power_clean, res.torque,
-                  res.occluded, flags[:, 0], flags[:, 1]) if keep_trace else None
-    return RunOutcome(metrics, 1e6 * spent / len(res.t),
-                      res.t[-1] / wall if len(res.t) else 0.0, trace)
+def control_step(cfg: RunConfig, system: GimbalSystem, model, seed: int, q_hold: float,
+                 truth: Callable[[], np.ndarray]) -> ControlStep:
+    """The control step of seed ``seed`` of ``cfg`` (``ledsim run``'s stack): dropout
+    gate, the estimator under its supervisor (the oracle reads ``truth``), the
+    scenario's law, and the gimbal motor holding ``q_hold`` [rad] during the warm-up."""
+    spec = cfg.scenario_spec
+    supervisor = run_supervisor(cfg, system, model, seed, truth, spec.law.tracks_beam)
+    return ControlStep(DropoutGate(system.constants), supervisor, spec.law,
+                       system.constants, GimbalMotor(system.inertia, q_hold), spec.warmup)
+
+
+class LoopRun:
+    """One seed of a closed-loop run: its world, sensor, disturbances, control step, and
+    the record of every step (``steps`` rows)."""
+
+    def __init__(self, cfg: RunConfig, seed: int, system: GimbalSystem, model,
+                 world: LinkWorld, steps: int):
+        self.seed = seed
+        self.world = world
+        self.sensor, self.disturbances = start_world(cfg, system, world, seed)
+        self.reading: SensorReading | None = None
+        self.step = control_step(cfg, system, model, seed, world.gimbal_angle, self._truth)
+        self.supervised = isinstance(self.step.supervisor, LinkSupervisor)
+        self.geo = np.empty((steps, 4, 2))  # distance, theta, phi, visible fraction
+        self.state = np.empty((steps, 2))
+        self.gimbal = np.empty((steps, 2))
+        self.hull = np.empty((steps, 3))
+        self.power = np.empty((steps, 2))
+        self.clean = np.empty((steps, 2))
+        self.applied = np.empty(steps)
+        self.xhat = np.empty((steps, 2))
+        self.flags = np.zeros((steps, 2), dtype=bool)  # lost, acquiring
+        self.spent = 0.0  # s in the control step
+
+    def _truth(self) -> np.ndarray:
+        r = self.reading
+        return np.array([r.phi, r.phidot])
+
+    def control(self, k: int, t: float) -> float:
+        """Read the sensor at step ``k`` (time ``t`` [s]), record it, and return the motor
+        torque [N m] the control step commands."""
+        r = self.reading = self.sensor.read()
+        self.geo[k] = r.distance, r.emission_angle, r.incidence_angle, r.visible_fraction
+        self.state[k] = r.phi, r.phidot
+        self.gimbal[k] = r.gimbal_angle, r.gimbal_rate
+        self.hull[k], self.power[k], self.clean[k] = r.hull_pos, r.power, r.power_clean
+        t0 = time.perf_counter()
+        torque = self.step(r.power, t, r.gimbal_angle, r.gimbal_rate)
+        self.spent += time.perf_counter() - t0
+        d = self.step.decision
+        self.xhat[k] = d.xhat
+        self.flags[k] = d.lost, d.acquiring
+        return torque
+
+    def result(self, times: np.ndarray) -> SimulationResult:
+        geo = self.geo
+        return SimulationResult(
+            t=times, phi=self.state[:, 0], phidot=self.state[:, 1],
+            gimbal_angle=self.gimbal[:, 0], gimbal_rate=self.gimbal[:, 1],
+            torque=self.applied, power=self.power, power_clean=self.clean,
+            incidence_angle=geo[:, 2], emission_angle=geo[:, 1], distance=geo[:, 0],
+            visible_fraction=geo[:, 3], occluded=geo[:, 3] < 1.0, hull_pos=self.hull)
 
 
 class ClosedLoop:
-    """One closed-loop run of ``cfg`` with seed ``seed``.
+    """The runs of ``cfg`` for each of ``seeds``, stepped together.
 
     Args:
-        cfg: the run.
-        seed: seeds the sensor noise, the disturbances and the particle filter.
-        on_step: ``on_step(t, world, reading, xhat)`` at every control step before physics
-            advances (the renderer uses it).
+        cfg: the configuration (every run's).
+        seeds: one run per seed.
+        threads: threads stepping the physics (1: the calling thread).
+        on_step: ``on_step(run, t)`` after each run's control step, before physics
+            advances (the renderer uses it; ``run`` is the seed's :class:`LoopRun`).
     """
 
-    def __init__(self, cfg: RunConfig, seed: int,
-                 on_step: Callable[..., None] | None = None):
+    def __init__(self, cfg: RunConfig, seeds: Sequence[int] | int = 0, threads: int = 1,
+                 on_step: Callable[[LoopRun, float], None] | None = None):
+        seeds = [seeds] if isinstance(seeds, int | np.integer) else list(seeds)
+        if not seeds:
+            raise ValueError("no seeds to run")
         self.cfg = cfg
-        self.scenario = cfg.scenario_spec
         self.system = GimbalSystem(cfg.world_config())
         self.model = identified_model(self.system)
-        self.estimator, self.estimator_system = loop_estimator(cfg, self.system, self.model)
-        if self.estimator is not None:
-            self.estimator.seed_run(seed)
-        constants = self.system.constants
-        self.law = self.scenario.start_law(constants)
-        self.gate = DropoutGate(constants)
-        self.world = self.system.world
-        self.sensor, self.disturbances = start_world(cfg, self.system, self.world, seed)
-        if self.estimator is not None:
-            self.estimator.reset()
+        self.Te = self.system.Te
+        self.steps = int(round(cfg.run_seconds / self.Te))
+        # The system's world serves the first run; the others share its model unless a
+        # disturbance changes the model (a water current sets its medium velocity).
+        share = not any(parse_disturbance(d).changes_model for d in cfg.disturbances)
+        worlds = [self.system.world] + [
+            LinkWorld(self.system.config, share_model_of=self.system.world if share else None)
+            for _ in seeds[1:]]
+        self.runs = [LoopRun(cfg, int(s), self.system, self.model, w, self.steps)
+                     for s, w in zip(seeds, worlds, strict=True)]
+        self.threads = max(1, min(int(threads), len(self.runs)))
+        bounds = np.linspace(0, len(self.runs), self.threads + 1).round().astype(int)
+        self._chunks = [range(a, b) for a, b in zip(bounds[:-1], bounds[1:], strict=True)]
         self.on_step = on_step
-        self.q_hold = self.world.gimbal_angle
-        self.supervisor = None
-        if self.estimator is not None and cfg.supervision:
-            self.supervisor = make_supervisor(cfg, self.system, self.estimator,
-                                              self.estimator_system, self.law.tracks_beam)
-        self.xhats: list[np.ndarray] = []
-        self.flags: list[tuple[bool, bool]] = []  # (lost, acquiring) per step
-        self.spent = 0.0  # s in the estimator and the law
 
-    def control(self, reading: SensorReading, t: float) -> float:
-        """Motor torque [N m] for step t [s] from the sensor reading."""
-        t0 = time.perf_counter()
-        est, w = self.estimator, self.world
-        scan_torque = None
-        if est is None:
-            xhat = np.array([reading.phi, reading.phidot])
-            self.flags.append((False, False))
-        else:
-            y = self.gate(reading.power)
-            if self.supervisor is None:
-                xhat = est.update(y)
-                self.flags.append((False, False))
-            else:
-                d = self.supervisor.step(t, y, w.gimbal_angle, w.gimbal_rate)
-                xhat, scan_torque = d.xhat, d.torque
-                if d.reseeded:
-                    self.law = self.scenario.start_law(self.system.constants)
-                self.flags.append((d.lost, d.acquiring))
-        warming_up = t < self.scenario.warmup
-        if scan_torque is not None:
-            u = -scan_torque / self.system.inertia
-        else:
-            u = 0.0 if warming_up else self.law(xhat, t)
-        if est is not None:
-            est.predict(u)
-        self.spent += time.perf_counter() - t0
-        self.xhats.append(xhat)
-        if self.on_step is not None:
-            self.on_step(t, w, reading, xhat)
-        if scan_torque is not None:
-            return scan_torque
-        if warming_up:
-            return hold_torque(self.system.inertia, w.gimbal_angle, w.gimbal_rate,
-                               self.q_hold)
-        return float(self.system.torque_for(u))
+    def _advance(self, chunk: range, torques: list, k: int, t_next: float) -> None:
+        for i in chunk:
+            run = self.runs[i]
+            run.applied[k] = advance(run.world, run.disturbances, torques[i], t_next)
 
-    def run(self, keep_trace: bool = False, progress: bool = False) -> RunOutcome:
+    def run(self, keep_trace: bool | Sequence[bool] = False,
+            progress: bool = False) -> list[RunOutcome]:
+        """Run every seed; one :class:`RunOutcome` per seed (in order). ``keep_trace``:
+        for all runs, or one flag per run. The real-time factor of each is the simulated
+        seconds over the wall time, times N (the throughput per run)."""
+        runs, n, Te = self.runs, len(self.runs), self.Te
+        keep = [keep_trace] * n if isinstance(keep_trace, bool) else list(keep_trace)
+        torques = [0.0] * n
+        pool = ThreadPoolExecutor(self.threads) if self.threads > 1 else None
         t0 = time.perf_counter()
-        res = simulate(self.world, self.sensor, self.cfg.run_seconds,
-                       disturbances=self.disturbances, controller=self.control,
-                       progress=progress)
+        try:
+            for k in tqdm(range(self.steps), disable=not progress, desc="simulate",
+                          leave=False, file=sys.stderr):
+                t = k * Te
+                for i, run in enumerate(runs):
+                    torques[i] = run.control(k, t)
+                    if self.on_step is not None:
+                        self.on_step(run, t)
+                t_next = (k + 1) * Te
+                if pool is None:
+                    self._advance(self._chunks[0], torques, k, t_next)
+                else:
+                    for f in [pool.submit(self._advance, c, torques, k, t_next)
+                              for c in self._chunks]:
+                        f.result()
+        finally:
+            if pool is not None:
+                pool.shutdown()
         wall = time.perf_counter() - t0
-        return outcome(res, np.array(self.xhats), np.array(self.flags, dtype=bool),
-                       self.cfg, self.system.constants, self.disturbances,
-                       self.supervisor is not None, self.spent, wall, keep_trace)
+        times = np.arange(self.steps) * Te
+        return [outcome(run.result(times), run.xhat, run.flags, self.cfg,
+                        self.system.constants, run.disturbances, run.supervised,
+                        run.spent, wall / n, keep[i]) for i, run in enumerate(runs)]
+
+
+def run_batch(cfg: RunConfig, seeds: Sequence[int], keep_trace: bool | Sequence[bool] = False,
+              threads: int = 1) -> list[RunOutcome]:
+    """The runs of ``cfg`` for ``seeds``, stepped together (see :class:`ClosedLoop`)."""
+    return ClosedLoop(cfg, seeds, threads).run(keep_trace)
 
 
 def run_once(cfg: RunConfig, seed: int, keep_trace: bool = False, on_step=None,
              progress: bool = False) -> RunOutcome:
     """One closed-loop run (see :class:`ClosedLoop`)."""
-    return ClosedLoop(cfg, seed, on_step).run(keep_trace, progress)
+    return ClosedLoop(cfg, [seed], on_step=on_step).run(keep_trace, progress)[0]

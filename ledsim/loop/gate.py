@@ -70,29 +70,3 @@ class DropoutGate:
             out.append(math.nan if drop else yi)
         return np.array(out)
 
-
-class BatchDropoutGate(DropoutGate):
-    """:class:`DropoutGate` of N runs at once: powers (N, 2) in, (N, 2) out."""
-
-    def reset(self) -> None:
-        self._held = None
-        self._level = None
-
-    @property
-    def held(self) -> np.ndarray:
-        return self._held
-
-    @property
-    def level(self) -> np.ndarray | None:
-        return self._level
-
-    def __call__(self, y: np.ndarray) -> np.ndarray:
-        y = np.asarray(y, dtype=float)
-        if self._level is None:
-            self._level = y.copy()
-            self._held = np.zeros(y.shape, dtype=int)
-        held, level, floor, a = self._held, self._level, self.floor, self.smoothing
-        drop = (y < floor) & ((held > 0) | (level > 2 * floor)) & (held < self.max_steps)
-        self._held = np.where(drop, held + 1, 0)
-        self._level = np.where(drop, level, (1 - a) * level + a * y)
-        return np.where(drop, np.nan, y)

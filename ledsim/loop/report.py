@@ -9,12 +9,12 @@ from pathlib import Path
 
 import numpy as np
 
+from observer.atomic import atomic_write_bytes
 from observer.metrics import mean_and_spread
 
 from ..montecarlo import run_jobs
 from ..results import DictAccess, write_json
-from .batched import run_batch
-from .closed_loop import RunOutcome, Trace, check_checkpoint, run_once
+from .closed_loop import RunOutcome, Trace, check_checkpoint, run_batch
 from .config import RunConfig
 
 
@@ -94,32 +94,44 @@ def summarize(cfg: RunConfig, outs: list[RunOutcome]) -> RunSummary:
         realtime_factor=stat(lambda o: o.realtime_factor))
 
 
-#: Fewest seeds a worker steps as one batch: below it the single loop's plain-float code
-#: is faster than numpy on arrays of one or two (measured: 1.6-2x at one seed).
-BATCH_MIN = 3
+def _job(args) -> RunOutcome:
+    cfg, seed, keep = args
+    return run_batch(cfg, [seed], keep_trace=keep)[0]
 
 
-def _job(args) -> list[RunOutcome]:
-    cfg, seeds = args
-    if len(seeds) < BATCH_MIN:
-        return [run_once(cfg, s, s == 0) for s in seeds]
-    return run_batch(cfg, seeds, keep_trace=[s == 0 for s in seeds])
+def run_seeds(cfg: RunConfig, progress: bool = True, all_traces: bool = False
+              ) -> tuple[RunSummary, list[RunOutcome]]:
+    """Monte-Carlo over seeds 0..cfg.seeds-1: (summary, one :class:`RunOutcome` per
+    seed, with its trace for seed 0, or for every seed with ``all_traces``).
+
+    Each seed is one job of the Monte-Carlo runner (the progress bar counts seeds),
+    through the one closed loop (:class:`~ledsim.loop.closed_loop.ClosedLoop`): a
+    seed's numbers do not depend on the number of workers."""
+    cfg.validate()
+    check_checkpoint(cfg)
+    jobs = [(cfg, s, all_traces or s == 0) for s in range(cfg.seeds)]
+    outs = run_jobs(_job, jobs, cfg.workers, f"{cfg.scenario}/{cfg.estimator}", progress)
+    return summarize(cfg, outs), outs
 
 
 def run_many(cfg: RunConfig, progress: bool = True) -> tuple[RunSummary, Trace]:
-    """Monte-Carlo over seeds 0..cfg.seeds-1; returns (summary, trace of seed 0).
+    """Monte-Carlo over seeds 0..cfg.seeds-1; returns (summary, trace of seed 0)
+    (see :func:`run_seeds`)."""
+    summary, outs = run_seeds(cfg, progress)
+    return summary, outs[0].trace
 
-    The seeds are split into one batch per worker, each run by the batched loop
-    (:mod:`ledsim.loop.batched`: every seed's numbers are the single run's) when it
-    holds at least :data:`BATCH_MIN` seeds."""
-    cfg.validate()
-    check_checkpoint(cfg)
-    chunks = np.array_split(np.arange(cfg.seeds), max(1, min(cfg.workers, cfg.seeds)))
-    jobs = [(cfg, [int(s) for s in c]) for c in chunks]
-    outs = [o for batch in run_jobs(_job, jobs, cfg.workers,
-                                    f"{cfg.scenario}/{cfg.estimator}", progress)
-            for o in batch]
-    return summarize(cfg, outs), outs[0].trace
+
+def write_traces(outs: list[RunOutcome], out: Path) -> list[Path]:
+    """``trace_seed<K>.npz`` for each seed K with a trace, in the folder ``out``: 1-D
+    arrays in SI units, one row per control step (:meth:`Trace.series`)."""
+    paths = []
+    for k, o in enumerate(outs):
+        if o.trace is not None:
+            path = out / f"trace_seed{k}.npz"
+            atomic_write_bytes(path, lambda tmp, o=o: np.savez_compressed(
+                open(tmp, "wb"), **o.trace.series()))
+            paths.append(path)
+    return paths
 
 
 def write_run(summary: RunSummary, trace: Trace | None, out: Path,

@@ -13,7 +13,6 @@ the gain; then the control law has the motor again.
 from __future__ import annotations
 
 from collections import deque
-from dataclasses import dataclass
 
 import numpy as np
 
@@ -23,6 +22,7 @@ from observer.supervision import GainTracker, ResidualMonitor
 
 from ..config import LinkConstants
 from ..optics import pair_power, pair_shape_inverse
+from ..step import Decision
 from .acquisition import AcquisitionScan
 
 
@@ -33,27 +33,6 @@ def model_gain(model, constants: LinkConstants) -> float:
     h = np.asarray(model.h(np.stack([phi, np.zeros_like(phi)], axis=-1)))
     g = pair_power(1.0, phi, constants)
     return float(np.sum(h * g) / np.sum(g * g))
-
-
-@dataclass
-class Decision:
-    """What the supervisor decided at one step.
-
-    Attributes:
-        xhat: the estimate (phi [rad], phidot [rad/s]).
-        lost: the estimate is not trusted (inconsistent with the data, or scanning).
-        acquiring: the acquisition scan has the motor.
-        torque: the scan's motor torque [N m] (None: the control law decides).
-        reseeded: the estimator was restarted from the scan this step.
-        reason: why the link is lost ("" when it is not).
-    """
-
-    xhat: np.ndarray
-    lost: bool
-    acquiring: bool = False
-    torque: float | None = None
-    reseeded: bool = False
-    reason: str = ""
 
 
 class LinkSupervisor:
@@ -96,6 +75,10 @@ class LinkSupervisor:
         sensor's noise over the tracked gain. (Not the monitor's learned noise: fast
         motion, such as a vibrating hull, inflates that and would pick a slow member.)"""
         return float(self.sensor_noise / self.gain.ratio)
+
+    def predict(self, u) -> None:
+        """Move the estimator to the next step under input ``u`` [rad/s^2]."""
+        self.estimator.predict(u)
 
     def step(self, t: float, y: np.ndarray, q: float, qdot: float) -> Decision:
         """Step ``t`` [s]: gated powers ``y`` [W], encoder angle ``q`` [rad] and rate

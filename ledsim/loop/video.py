@@ -37,24 +37,21 @@ def render_video(cfg: RunConfig, seed: int, out: Path, spec: VideoSpec,
              f"{', '.join(cfg.disturbances) or 'no disturbance'}")
     writer = VideoWriter(out, spec.fps)
     recorder: list[FrameRecorder] = []
-    loops: list[ClosedLoop] = []
 
-    def on_step(t, world, reading, xhat):
+    def on_step(run, t):
         if not recorder:
-            recorder.append(FrameRecorder(world, spec.width, spec.height, spec.fps,
+            recorder.append(FrameRecorder(run.world, spec.width, spec.height, spec.fps,
                                           spec.camera, writer, label=label))
-        loop = loops[0]
         status = ""
-        if loop.supervisor is not None:
-            lost, acquiring = loop.flags[-1]
-            status = ("scanning" if acquiring else "lost" if lost
-                      else "dropout" if loop.gate.held.any() else "ok")
-        recorder[0](t, world, reading, xhat, status=status)
+        if run.supervised:
+            d = run.step.decision
+            status = ("scanning" if d.acquiring else "lost" if d.lost
+                      else "dropout" if run.step.gate.held.any() else "ok")
+        recorder[0](t, run.world, run.reading, run.step.decision.xhat, status=status)
 
     ok = False
     try:
-        loops.append(ClosedLoop(cfg, seed, on_step))
-        loops[0].run(progress=progress)
+        ClosedLoop(cfg, [seed], on_step=on_step).run(progress=progress)
         if still is not None and recorder and recorder[0].last_frame is not None:
             from PIL import Image
 

@@ -31,6 +31,7 @@ from ..control import Excitation, PaperRateDamping
 from ..errors import LedsimError
 from ..results import DictAccess
 from ..scenario import Scenario
+from ..step import ControlStep, DirectInput, Unsupervised, identity_gate
 
 # Paper Table 1 / Table 2 RMSE: (x1 [rad], x2 [rad/s], y1 [W], y2 [W]).
 PAPER_TABLE1 = {
@@ -120,9 +121,9 @@ def run(system: DiscreteSystem, scenario: Scenario, estimator: Estimator, noise:
     x = np.asarray(scenario.x0, dtype=float)
     xs, xhats = np.empty((N, n)), np.empty((N, n))
     ys, us = np.empty((N, p)), np.empty(N)
-    law = scenario.start_law(system.constants)
-    warmup = int(round(scenario.warmup / system.Te))
     estimator.reset(x0_guess)
+    step = ControlStep(identity_gate, Unsupervised(estimator), scenario.law,
+                       system.constants, DirectInput(), scenario.warmup)
     spent = 0.0
     for k in range(N):
         xs[k] = x
@@ -131,11 +132,9 @@ def run(system: DiscreteSystem, scenario: Scenario, estimator: Estimator, noise:
             y = np.where(dropout[k], np.nan, y)
         ys[k] = y
         t0 = time.perf_counter()
-        xhat = estimator.update(y)
-        u = 0.0 if k < warmup else float(law(xhat, k * system.Te))
-        estimator.predict(u)
+        u = float(step(y, k * system.Te))
         spent += time.perf_counter() - t0
-        xhats[k] = xhat
+        xhats[k] = step.decision.xhat
         us[k] = u
         x = system.f(x, u) + noise.process[k]
     return Trajectory(xs, xhats, ys, system.h(xs), system.h(xhats), us, spent)

@@ -17,6 +17,7 @@ from concurrent.futures import ThreadPoolExecutor
 import mujoco
 import numpy as np
 
+from .tick import advance, prepare
 from .world import RAY_GROUPS, LinkWorld
 
 
@@ -73,7 +74,7 @@ class WorldBatch:
         self._gathers = [(out.reshape((-1,) + out.shape[2:]), views)
                          for out, views in self._gather_plan()]
         for i in range(n):
-            self._prepare(i, self.time)
+            prepare(self.worlds[i], self.disturbances[i], self.time)
         self._gather()
 
     def _gather_plan(self) -> list[tuple[np.ndarray, list]]:
@@ -125,15 +126,6 @@ class WorldBatch:
     def __exit__(self, *exc) -> None:
         self.close()
 
-    def _prepare(self, i: int, t: float) -> None:
-        """Start of step t in world i: disturbances act, then kinematics (the order of
-        :func:`ledsim.physics.simulation.simulate`)."""
-        w = self.worlds[i]
-        w.clear_hull_wrench()
-        for dist in self.disturbances[i]:
-            dist.apply(w, t)
-        w.forward_kinematics()
-
     def _gather(self) -> None:
         """Copy every world's poses into the (N, ...) arrays (one concatenate per
         quantity: cheaper than N row copies)."""
@@ -145,10 +137,7 @@ class WorldBatch:
 
     def _advance(self, chunk: range, torques: list, t_next: float) -> None:
         for i in chunk:
-            w = self.worlds[i]
-            self.applied[i] = w.set_torque(torques[i])
-            w.step()
-            self._prepare(i, t_next)
+            self.applied[i] = advance(self.worlds[i], self.disturbances[i], torques[i], t_next)
 
     def _map(self, work, *args) -> None:
         """``work(chunk, *args)`` for every thread's chunk of worlds, then gather."""
@@ -169,7 +158,7 @@ class WorldBatch:
         for i in chunk:
             w = self.worlds[i]
             mujoco.mj_setState(w.model, w.data, states[i], spec)
-            self._prepare(i, float(states[i, 0]))
+            prepare(w, self.disturbances[i], float(states[i, 0]))
 
     def set_state(self, states: np.ndarray) -> None:
         """Every world to its full physics state (``mjSTATE_FULLPHYSICS``, (N, nstate),

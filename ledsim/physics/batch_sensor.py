@@ -23,17 +23,12 @@ from .sensor import IrradianceSensor, SensorReading
 @dataclass
 class BatchReading(SensorReading):
     """One sample of N sensors: the fields of :class:`SensorReading` with a leading axis
-    of N worlds (``phi``, ``phidot``: (N,)), and
+    of N worlds (``phi``, ``phidot``, ``gimbal_angle``, ``gimbal_rate``: (N,)), and
 
     Attributes:
-        gimbal_angle, gimbal_rate: encoder angle and rate [rad, rad/s], (N,).
-        hull_pos: AUV position [m], (N, 3).
         rays: (N, 2) which photodiodes cast rays this step (the others were provably clear).
     """
 
-    gimbal_angle: np.ndarray
-    gimbal_rate: np.ndarray
-    hull_pos: np.ndarray
     rays: np.ndarray
 
 

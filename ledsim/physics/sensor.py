@@ -41,6 +41,8 @@ class SensorReading:
         distance: LED-photodiode distance [m].
         visible_fraction: share of aperture rays that reach the LED [-].
         phi, phidot: the true state x = (phi, phidot) of photodiode 1 [rad, rad/s].
+        gimbal_angle, gimbal_rate: the gimbal encoder: hinge angle [rad] and rate [rad/s].
+        hull_pos: the AUV's position [m], shape (3,).
     """
 
     power: np.ndarray
@@ -51,6 +53,9 @@ class SensorReading:
     visible_fraction: np.ndarray
     phi: float
     phidot: float
+    gimbal_angle: float
+    gimbal_rate: float
+    hull_pos: np.ndarray
 
 
 class IrradianceSensor:
@@ -162,8 +167,10 @@ class IrradianceSensor:
         clean = np.array([self._clean_power_at(*g) for g in zip(*geo, strict=True)])
         dist, theta, phi, vis = (np.array(v) for v in geo)
         power = clean + (self.rng.standard_normal(2) * self.noise_std if noise else 0.0)
+        w = self.world
         return SensorReading(power, clean, phi, theta, dist, vis, float(phi[0]),
-                             self.incidence_rate(0))
+                             self.incidence_rate(0), w.gimbal_angle, w.gimbal_rate,
+                             w.hull_pos.copy())
 
     def incidence_rate(self, i: int) -> float:
         """d(phi_i)/dt [rad/s]: line-of-sight rotation minus photodiode rotation, about the

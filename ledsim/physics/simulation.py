@@ -1,9 +1,10 @@
 """Headless simulation loop at the control period Te, with physics substeps.
 
-One pass at step k (t = k Te): disturbances act, kinematics are updated, the sensor
-samples y_k and the true state x_k = (phi, phidot) of photodiode 1, the gimbal torque
-u_k is chosen (a profile, or a controller fed with the sensor reading), and physics
-advances by Te in ``substeps`` MuJoCo steps.
+One pass at step k (t = k Te): the sensor samples y_k and the true state
+x_k = (phi, phidot) of photodiode 1 on a world prepared for t (disturbances acted,
+kinematics updated), the gimbal torque u_k is chosen (a profile, or a controller fed with
+the sensor reading), and :func:`~ledsim.physics.tick.advance` moves physics on by Te in
+``substeps`` MuJoCo steps and prepares the next step.
 """
 
 from __future__ import annotations
@@ -22,6 +23,7 @@ from observer.atomic import atomic_write_bytes
 
 from ..errors import LedsimError
 from .sensor import IrradianceSensor, SensorReading
+from .tick import advance, prepare
 from .world import LinkWorld
 
 
@@ -141,13 +143,10 @@ def simulate(world: LinkWorld, sensor: IrradianceSensor, seconds: float,
     hull = np.empty((n, 3))
     power = np.empty((n, 2)) if controller else None
     t0 = world.time
+    prepare(world, disturbances, t0)
     for k in tqdm(range(n), disable=not progress, desc="simulate", leave=False,
                   file=sys.stderr):
         t = t0 + k * Te
-        world.clear_hull_wrench()
-        for dist in disturbances:
-            dist.apply(world, t)
-        world.forward_kinematics()
         if controller is None:
             geo[k] = sensor.geometry()
             state[k] = geo[k, 2, 0], sensor.incidence_rate(0)
@@ -160,8 +159,7 @@ def simulate(world: LinkWorld, sensor: IrradianceSensor, seconds: float,
             u = controller(r, t)
         gimbal[k] = world.gimbal_angle, world.gimbal_rate
         hull[k] = world.hull_pos
-        applied[k] = world.set_torque(u)
-        world.step()
+        applied[k] = advance(world, disturbances, u, t0 + (k + 1) * Te)
     d_, th, ph, vis = geo[:, 0], geo[:, 1], geo[:, 2], geo[:, 3]
     clean = sensor.clean_power(d_, th, ph, vis)
     if power is None:

@@ -1,0 +1,82 @@
+"""What one closed-loop run gives back: its trace and its :class:`RunOutcome`."""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from ..control import intensity_maximum
+from ..optics import receiver_response, transmitter_gain
+from ..results import DictAccess
+from .config import RunConfig
+from .metrics import RunMetrics, run_metrics
+
+
+@dataclass
+class Trace(DictAccess):
+    """Time series of one run, one row per control step.
+
+    Attributes:
+        t [s]; x, xhat: true and estimated (phi [rad], phidot [rad/s]); power,
+        power_clean (N, 2) [W]; torque [N m]; occluded (N, 2): any aperture ray blocked;
+        lost (N,): the supervisor did not trust the estimate; acquiring (N,): its
+        acquisition scan had the motor.
+    """
+
+    t: np.ndarray
+    x: np.ndarray
+    xhat: np.ndarray
+    power: np.ndarray
+    power_clean: np.ndarray
+    torque: np.ndarray
+    occluded: np.ndarray
+    lost: np.ndarray | None = None
+    acquiring: np.ndarray | None = None
+
+    def series(self) -> dict[str, np.ndarray]:
+        """The trace as 1-D arrays in SI units, one row per control step: ``t`` [s],
+        ``phi``, ``phi_hat`` [rad], ``phidot``, ``phidot_hat`` [rad/s], ``p1``, ``p2``
+        (measured powers [W]), ``torque`` [N m], ``lost`` (bool)."""
+        n = len(self.t)
+        lost = np.zeros(n, dtype=bool) if self.lost is None else np.asarray(self.lost)
+        return {"t": self.t, "phi": self.x[:, 0], "phidot": self.x[:, 1],
+                "phi_hat": self.xhat[:, 0], "phidot_hat": self.xhat[:, 1],
+                "p1": self.power[:, 0], "p2": self.power[:, 1], "torque": self.torque,
+                "lost": lost}
+
+
+@dataclass
+class RunOutcome(DictAccess):
+    """One seed: its metrics, the estimator's cost [us per step], the loop's real-time
+    factor [-], and the trace when asked for."""
+
+    metrics: RunMetrics
+    us_per_step: float
+    realtime_factor: float
+    trace: Trace | None = None
+
+
+def achievable_power(res, c) -> np.ndarray:
+    """Most photodiode 1 could receive at each step of ``res`` [W]: the transmitter gain
+    of that moment's distance and LED angle, times the receiver's peak response."""
+    g_max = float(receiver_response(intensity_maximum(c), c.receiver))
+    return transmitter_gain(res.distance[:, 0], res.emission_angle[:, 0], c) * g_max
+
+
+def outcome(res, xhat: np.ndarray, flags: np.ndarray, cfg: RunConfig, constants,
+            disturbances, supervised: bool, spent: float, wall: float,
+            keep_trace: bool) -> RunOutcome:
+    """A run's :class:`RunOutcome` from its simulation result, its estimates, its
+    (lost, acquiring) flags per step, and the seconds spent controlling and in all."""
+    events = [d for d in disturbances if d.event_end is not None]
+    flags = flags.reshape(-1, 2)
+    metrics = run_metrics(res.x, xhat, res.power_clean, cfg.scenario_spec.steady_from,
+                          constants, events[0].event_end if events else None,
+                          lost=flags[:, 0] if supervised else None,
+                          event_start=events[0].start if events else None,
+                          power_max=achievable_power(res, constants))
+    trace = Trace(res.t, res.x, xhat, res.power, res.power_clean, res.torque,
+                  res.occluded, flags[:, 0], flags[:, 1]) if keep_trace else None
+    return RunOutcome(metrics, 1e6 * spent / len(res.t),
+                      res.t[-1] / wall if len(res.t) else 0.0, trace)

@@ -1,0 +1,167 @@
+"""One control step, written once: sense, gate, supervise, control law, actuator.
+
+Every loop of the project goes through :class:`ControlStep`: ``ledsim run`` (one run or
+many stepped together), the shipped policy of the Gymnasium environment, and the
+paper's closed-form experiments. At step t:
+
+1. **gate**: occluded samples become missing (:class:`~ledsim.loop.gate.DropoutGate`;
+   the identity for the paper's experiments, whose dropouts are given);
+2. **supervise**: the supervisor runs the estimator's ``update`` and decides whether the
+   estimate is trusted, or whether its acquisition scan has the motor
+   (:class:`~ledsim.loop.supervisor.LinkSupervisor`; :class:`Unsupervised` trusts the
+   estimator as it is);
+3. **control law**: the input u [rad/s^2] from the estimate; during the warm-up the
+   motor holds its encoder angle instead, and while scanning the scan drives it;
+4. **actuator**: u becomes a motor command (:class:`GimbalMotor` in MuJoCo,
+   :class:`DirectInput` for the closed-form model), and the supervisor runs the
+   estimator's ``predict`` with the u that command gives.
+
+The sensor reading (step 0) and the physics tick (after the step) belong to the world
+that runs the loop (:mod:`ledsim.physics.tick` in MuJoCo).
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable
+from dataclasses import dataclass
+
+import numpy as np
+
+from .config import LinkConstants
+from .control import ControlLaw
+
+
+@dataclass
+class Decision:
+    """What the supervisor decided at one step.
+
+    Attributes:
+        xhat: the estimate (phi [rad], phidot [rad/s]).
+        lost: the estimate is not trusted (inconsistent with the data, or scanning).
+        acquiring: the acquisition scan has the motor.
+        torque: the scan's motor torque [N m] (None: the control law decides).
+        reseeded: the estimator was restarted from the scan this step.
+        reason: why the link is lost ("" when it is not).
+    """
+
+    xhat: np.ndarray
+    lost: bool
+    acquiring: bool = False
+    torque: float | None = None
+    reseeded: bool = False
+    reason: str = ""
+
+
+class Unsupervised:
+    """The supervisor of a run without supervision: the estimator alone, always trusted."""
+
+    def __init__(self, estimator):
+        self.estimator = estimator
+
+    def step(self, t: float, y: np.ndarray, q: float, qdot: float) -> Decision:
+        return Decision(self.estimator.update(y), False)
+
+    def predict(self, u) -> None:
+        self.estimator.predict(u)
+
+
+class GimbalMotor:
+    """The gimbal's motor seen from the paper's input u.
+
+    phi = phi_home - q, so a torque tau gives phi'' = -tau / I: ``torque(u) = -I u``.
+
+    Args:
+        inertia: the gimbal's inertia about the hinge [kg m^2].
+        q_hold: encoder angle [rad] the motor holds during the warm-up.
+        hold_gains: PD gains of that hold, in units of the inertia (1/s^2, 1/s): 10 rad/s
+            of bandwidth.
+    """
+
+    def __init__(self, inertia: float, q_hold: float = 0.0,
+                 hold_gains: tuple[float, float] = (100.0, 20.0)):
+        self.inertia = inertia
+        self.q_hold = q_hold
+        self.hold_gains = hold_gains
+
+    def torque(self, u: float) -> float:
+        """Motor torque [N m] that commands angular acceleration ``u`` [rad/s^2] of phi."""
+        return -self.inertia * u
+
+    def acceleration(self, torque: float) -> float:
+        """The u [rad/s^2] a motor torque [N m] commands."""
+        return -torque / self.inertia
+
+    def hold(self, q: float, qdot: float) -> float:
+        """Warm-up torque [N m]: PD on the encoder angle ``q`` [rad] and rate ``qdot``."""
+        kp, kd = self.hold_gains
+        return -kp * self.inertia * (q - self.q_hold) - kd * self.inertia * qdot
+
+
+class DirectInput:
+    """The closed-form model's actuator: the command is u itself; no warm-up hold."""
+
+    def torque(self, u: float) -> float:
+        return u
+
+    def acceleration(self, torque: float) -> float:
+        return torque
+
+    def hold(self, q: float, qdot: float) -> float:
+        return 0.0
+
+
+def identity_gate(y: np.ndarray) -> np.ndarray:
+    """No gate: every sample passes as it is."""
+    return y
+
+
+class ControlStep:
+    """sense -> gate -> supervise -> control law -> actuator, for one run.
+
+    Args:
+        gate: ``gate(y) -> y`` with occluded samples NaN.
+        supervisor: ``step(t, y, q, qdot) -> Decision`` (runs the estimator's update)
+            and ``predict(u)``.
+        law: the control law template (a fresh copy starts now and after a re-seed).
+        constants: the link (binds the law).
+        actuator: turns u into a motor command and back; holds during the warm-up.
+        warmup: no control-law input before this time [s].
+
+    After a call, :attr:`decision` and :attr:`u` hold what the step decided.
+    """
+
+    def __init__(self, gate: Callable[[np.ndarray], np.ndarray], supervisor,
+                 law: ControlLaw, constants: LinkConstants, actuator, warmup: float = 0.0):
+        self.gate = gate
+        self.supervisor = supervisor
+        self.law_template = law
+        self.constants = constants
+        self.law = law.start(constants)
+        self.actuator = actuator
+        self.warmup = warmup
+        self.decision: Decision | None = None
+        self.u = 0.0
+
+    @property
+    def estimator(self):
+        return self.supervisor.estimator
+
+    def __call__(self, y: np.ndarray, t: float, q: float = 0.0, qdot: float = 0.0) -> float:
+        """The motor command of step ``t`` [s] from the measured powers ``y`` [W] and the
+        encoder angle ``q`` [rad] and rate ``qdot`` [rad/s]."""
+        d = self.supervisor.step(t, self.gate(y), q, qdot)
+        if d.reseeded:
+            self.law = self.law_template.start(self.constants)
+        act = self.actuator
+        if d.torque is not None:  # the acquisition scan has the motor
+            command = d.torque
+            u = act.acceleration(command)
+        elif t < self.warmup:  # the estimator is still forgetting its initial guess
+            command = act.hold(q, qdot)
+            u = 0.0
+        else:
+            u = self.law(d.xhat, t)
+            command = act.torque(u)
+        self.supervisor.predict(u)
+        self.decision, self.u = d, u
+        return command
