@@ -14,6 +14,10 @@ from dataclasses import asdict, dataclass, field, replace
 
 from .errors import LedsimError
 
+#: The paper's link distance d0 [m]: the default everywhere, and the distance of the
+#: shipped MuJoCo bank that serves every other.
+PAPER_DISTANCE = 0.085
+
 
 class ConfigError(LedsimError):
     """A user-supplied constant is out of its allowed range."""
@@ -58,7 +62,7 @@ class LinkConstants:
 
     Te: float = 0.01
     dphi: float = math.radians(6.0)
-    distance: float = 0.085
+    distance: float = PAPER_DISTANCE
     power_scale: float = 7.3e-3
     attenuation: float = 0.15
     led_half_angle: float = math.radians(20.0)

@@ -41,23 +41,24 @@ def intensity_maximum(constants: LinkConstants) -> float:
 
 @dataclass
 class Excitation:
-    """Open-loop input cos_amp cos(omega t) + sin_amp sin(omega t) [rad/s^2] (IF1, IF2).
+    """Open-loop input cos_amp cos(w t) + sin_amp sin(w t) [rad/s^2] (IF1, IF2).
 
     Attributes:
-        cos_amp, sin_amp: amplitudes [rad/s^2]; omega: angular frequency [rad/s].
+        cos_amp, sin_amp: amplitudes [rad/s^2]; angular_frequency: w [rad/s].
     """
 
     tracks_beam = False
 
     cos_amp: float = 0.0
     sin_amp: float = 0.0
-    omega: float = 5.0
+    angular_frequency: float = 5.0
 
     def start(self, constants: LinkConstants) -> Excitation:
         return replace(self)
 
     def __call__(self, xhat: np.ndarray, t: float) -> float:
-        return self.cos_amp * math.cos(self.omega * t) + self.sin_amp * math.sin(self.omega * t)
+        w = self.angular_frequency
+        return self.cos_amp * math.cos(w * t) + self.sin_amp * math.sin(w * t)
 
 
 
@@ -81,7 +82,7 @@ class PaperRateDamping:
 class AlignmentPID:
     """Cascade alignment controller, output u [rad/s^2].
 
-    Outer loop: a rate command ``clip(-omega (phi_hat - phi_ref), +-rate_max)`` that
+    Outer loop: a rate command ``clip(-bandwidth (phi_hat - phi_ref), +-rate_max)`` that
     slews phi towards the intensity peak no faster than ``rate_max``, which keeps the
     motion inside the observers' training domain (|phidot| <= 0.5 rad/s). Inner loop: PI
     on the rate error, ``u = -kv r - ki int(r)``, ``r = phidot_hat - rate_cmd``; its
@@ -91,7 +92,7 @@ class AlignmentPID:
 
     Attributes:
         phi_ref: target incidence angle [rad]; None = the intensity maximum.
-        omega: outer-loop bandwidth [rad/s]; rate_max: slew-rate limit [rad/s].
+        bandwidth: outer-loop bandwidth [rad/s]; rate_max: slew-rate limit [rad/s].
         kv [1/s], ki [1/s^2]: inner PI gains; Te: control period [s] (None: the link's).
         u_max: command limit [rad/s^2]; i_max: clamp of the integral [rad/s].
         domain: half-widths of the estimate's clip (phi [rad], phidot [rad/s]).
@@ -100,7 +101,7 @@ class AlignmentPID:
     tracks_beam = True
 
     phi_ref: float | None = None
-    omega: float = 3.0
+    bandwidth: float = 3.0
     rate_max: float = 0.3
     kv: float = 12.0
     ki: float = 36.0
@@ -120,7 +121,7 @@ class AlignmentPID:
     def __call__(self, xhat: np.ndarray, t: float) -> float:
         phi = min(max(xhat[0], -self.domain[0]), self.domain[0])
         rate = min(max(xhat[1], -self.domain[1]), self.domain[1])
-        cmd = min(max(-self.omega * (phi - self.phi_ref), -self.rate_max), self.rate_max)
+        cmd = min(max(-self.bandwidth * (phi - self.phi_ref), -self.rate_max), self.rate_max)
         r = rate - cmd
         self.integral = min(max(self.integral + r * self.Te, -self.i_max), self.i_max)
         u = -self.kv * r - self.ki * self.integral

@@ -43,7 +43,7 @@ HANDOVER_S = 3.0
 
 def build_estimator(name: str, system: DiscreteSystem, *, model: DiscreteSystem | None = None,
                     checkpoint: str | Path | None = None, particles: int = 2000,
-                    omega: bool = True,
+                    use_omega: bool = True,
                     slow_checkpoint: str | Path | None = None) -> Estimator | None:
     """The estimator called ``name``; None for the oracle.
 
@@ -56,7 +56,7 @@ def build_estimator(name: str, system: DiscreteSystem, *, model: DiscreteSystem 
         checkpoint: KKL checkpoint file (required for ``kkl`` and ``kkl-paper``).
         particles: particle-filter size (its random numbers follow the run's seed:
             ``Estimator.seed_run``).
-        omega: apply the KKL's Omega correction.
+        use_omega: apply the KKL's Omega correction.
         slow_checkpoint: the slow half of ``kkl-handover`` (``checkpoint`` is its fast
             half).
     """
@@ -67,12 +67,13 @@ def build_estimator(name: str, system: DiscreteSystem, *, model: DiscreteSystem 
         obs = ckpt.load(checkpoint, system)
         obs.name = name
         obs.system = model
-        obs.omega = omega
+        obs.use_omega = use_omega
         return obs
     if name == "kkl-handover":
         if checkpoint is None or slow_checkpoint is None:
             raise LedsimError("estimator 'kkl-handover' needs a fast and a slow checkpoint")
-        fast, slow = (build_estimator("kkl", system, model=model, checkpoint=c, omega=omega)
+        fast, slow = (build_estimator("kkl", system, model=model, checkpoint=c,
+                                      use_omega=use_omega)
                       for c in (checkpoint, slow_checkpoint))
         return HandoverKKL(fast, slow, handover_steps=int(round(HANDOVER_S / system.Te)))
     if name == "ekf":

@@ -1,17 +1,66 @@
-"""All-or-nothing output folders: a command's files appear together, or not at all."""
+"""All-or-nothing outputs: a file appears complete under its name, a command's files
+appear together, or not at all; and the Ctrl-C flag that stops them being committed."""
 
 from __future__ import annotations
 
 import os
 import shutil
 import tempfile
+import threading
 from collections.abc import Iterator
 from contextlib import contextmanager
 from pathlib import Path
 
-from observer.atomic import check_interrupt
-
 from .errors import LedsimError
+
+#: Set by a command-line SIGINT handler. Python ignores a KeyboardInterrupt raised inside
+#: some callbacks (an import lock's weakref callback, for one), so the work may carry on:
+#: no output is then committed (:func:`check_interrupt` before every final rename).
+INTERRUPTED = threading.Event()
+
+
+def check_interrupt() -> None:
+    """Raise KeyboardInterrupt if an interrupt was requested, even a swallowed one."""
+    if INTERRUPTED.is_set():
+        raise KeyboardInterrupt
+
+
+def umask() -> int:
+    """The process's umask (read without changing it)."""
+    umask = os.umask(0)
+    os.umask(umask)
+    return umask
+
+
+def atomic_write_bytes(path: Path, write) -> None:
+    """Call ``write(tmp_path)`` then rename over ``path``: never a half-written file. The
+    file gets the usual mode (0666 less the umask)."""
+    path = Path(path)
+    path.parent.mkdir(parents=True, exist_ok=True)
+    fd, tmp = tempfile.mkstemp(dir=path.parent, prefix=f".{path.name}.", suffix=".tmp")
+    os.close(fd)
+    try:
+        write(tmp)
+        os.chmod(tmp, 0o666 & ~umask())  # mkstemp makes 0600
+        check_interrupt()
+        os.replace(tmp, path)
+    except BaseException:
+        if os.path.exists(tmp):
+            os.unlink(tmp)
+        raise
+
+
+def atomic_write_text(path: Path, text: str) -> None:
+    atomic_write_bytes(path, lambda tmp: Path(tmp).write_text(text))
+
+
+def save_checkpoint(obs, path: str | Path, extra: dict | None = None) -> Path:
+    """:func:`observer.checkpoint.save` through :func:`atomic_write_bytes` (so Ctrl-C
+    leaves no checkpoint behind)."""
+    from observer import checkpoint
+
+    return checkpoint.save(obs, path, extra, write_bytes=lambda p, data: atomic_write_bytes(
+        p, lambda tmp: Path(tmp).write_bytes(data)))
 
 
 def _can_create_in(folder: Path) -> bool:
@@ -68,6 +117,7 @@ def output_folder(out: str | Path) -> Iterator[Path]:
     out = Path(out)
     out.parent.mkdir(parents=True, exist_ok=True)
     tmp = Path(tempfile.mkdtemp(dir=out.parent, prefix=f".{out.name}.", suffix=".partial"))
+    os.chmod(tmp, 0o777 & ~umask())  # mkdtemp makes 0700
     try:
         yield tmp
         check_interrupt()

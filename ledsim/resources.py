@@ -47,8 +47,8 @@ def require_shipped_checkpoint(distance: float, world: str = "closed-form",
     path = shipped_checkpoint(distance, world, design, noise)
     if not path.is_file():
         how = (f"`ledsim train --distance {distance:g} --out PATH`" if world == "closed-form"
-               else f"`python scripts/train_mujoco.py --distances {distance:g} "
-               f"--noise-scales {noise:g}`")
+               else f"`ledsim train --world mujoco --distance {distance:g} "
+               f"--noise-scale {noise:g} --out PATH`")
         kind = "checkpoint" if world == "closed-form" else "MuJoCo observer"
         raise LedsimError(f"no shipped {kind} for distance {distance:g} m: train one with "
                           f"{how} and pass --checkpoint PATH")

@@ -12,14 +12,16 @@ without executing anything in it, and only a file it does not recognise goes to
 
 from __future__ import annotations
 
+import io
 import json
 import math
+import os
+from collections.abc import Callable
 from pathlib import Path
 
 import numpy as np
 
 from . import tensorfile
-from .atomic import atomic_write_bytes, atomic_write_text
 from .errors import ObserverError
 from .kkl import KKLObserver
 from .nets import NumpyMLP
@@ -32,9 +34,25 @@ class CheckpointError(ObserverError):
     """A checkpoint is missing, corrupt, or was trained for another system."""
 
 
-def save(obs: KKLObserver, path: str | Path, extra: dict | None = None) -> Path:
-    """Write ``obs`` to ``path`` (``.pt``) and its metadata to ``path.with_suffix('.json')``."""
+def _replace(path: Path, data: bytes) -> None:
+    """Write ``data`` beside ``path`` and rename it over ``path`` (never half a file)."""
+    path.parent.mkdir(parents=True, exist_ok=True)
+    tmp = path.with_name(f".{path.name}.{os.getpid()}.tmp")
+    try:
+        tmp.write_bytes(data)
+        os.replace(tmp, path)
+    finally:
+        tmp.unlink(missing_ok=True)
+
+
+def save(obs: KKLObserver, path: str | Path, extra: dict | None = None,
+         write_bytes: Callable[[Path, bytes], None] | None = None) -> Path:
+    """Write ``obs`` to ``path`` (``.pt``) and its metadata to ``path.with_suffix('.json')``.
+
+    ``write_bytes(path, data)`` writes each file (default: beside it, then renamed over
+    it); an application passes its own (``ledsim.outputs.save_checkpoint``)."""
     path = Path(path)
+    write_bytes = write_bytes or _replace
     meta = {
         "format": FORMAT,
         "system": obs.system.metadata(),
@@ -52,9 +70,11 @@ def save(obs: KKLObserver, path: str | Path, extra: dict | None = None) -> Path:
                for k, a in net.arrays().items()}
     meta = strict_json(meta)
     payload = {"format": FORMAT, "metadata_json": json.dumps(meta, allow_nan=False), **tensors}
-    atomic_write_bytes(path, lambda tmp: torch.save(payload, tmp))
-    atomic_write_text(path.with_suffix(".json"), json.dumps(meta, indent=2, allow_nan=False)
-                      + "\n")
+    buf = io.BytesIO()
+    torch.save(payload, buf)
+    write_bytes(path, buf.getvalue())
+    write_bytes(path.with_suffix(".json"),
+                (json.dumps(meta, indent=2, allow_nan=False) + "\n").encode())
     return path
 
 
@@ -96,9 +116,15 @@ def _read(path: Path) -> dict:
         return tensorfile.read(path)
     except tensorfile.Unsupported:
         pass
+    import warnings
+
     import torch
 
-    payload = torch.load(path, map_location="cpu", weights_only=True)
+    # torch warns about foreign pickle protocols before it refuses a file; the refusal is
+    # reported as one line by the caller, so the warning is not shown.
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        payload = torch.load(path, map_location="cpu", weights_only=True)
     if not isinstance(payload, dict):
         raise TypeError("not a dict")
     return {k: v.numpy(force=True) if isinstance(v, torch.Tensor) else v

@@ -117,20 +117,20 @@ class KKLObserver(Estimator):
         encoder_T: numpy MLP x -> z (rescaled coordinates).
         decoder_T_star: numpy MLP z -> x.
         u_bar: the constant input the maps were learned for.
-        omega: apply the Omega(z, u) correction when u != u_bar.
+        use_omega: apply the Omega(z, u) correction when u != u_bar.
     """
 
     name = "kkl"
 
     def __init__(self, system: DiscreteSystem, eigenvalues, B, encoder_T: NumpyMLP,
-                 decoder_T_star: NumpyMLP, u_bar: float = 0.0, omega: bool = True):
+                 decoder_T_star: NumpyMLP, u_bar: float = 0.0, use_omega: bool = True):
         super().__init__(system)
         self.eigenvalues = np.asarray(eigenvalues, dtype=float)
         self.B = np.asarray(B, dtype=float)
         self.encoder_T = encoder_T
         self.decoder_T_star = decoder_T_star
         self.u_bar = float(u_bar)
-        self.omega = omega
+        self.use_omega = use_omega
         self.z = np.zeros(self.q)
         self._y = None
         self._xhat = None
@@ -176,14 +176,14 @@ class KKLObserver(Estimator):
         z_next = self.eigenvalues * self.z + self.B @ self._y
         moved = (u != self.u_bar) if isinstance(u, float | int) else \
             np.any(np.asarray(u, dtype=float) != self.u_bar)
-        if self.omega and moved:  # single-sample Omega: matrix-vector products only
+        if self.use_omega and moved:  # single-sample Omega: matrix-vector products only
             f, enc, xh = self.system.f, self.encoder_T.vector, self._xhat
             z_next = z_next + enc(f(xh, u)) - enc(f(xh, self.u_bar))
         self.z = z_next
 
     # -- many trajectories of the autonomous observer ---------------------------------
 
-    def run_batch(self, ys: np.ndarray, x0: np.ndarray | None = None,
+    def run_trajectories(self, ys: np.ndarray, x0: np.ndarray | None = None,
                   dtype=np.float64) -> np.ndarray:
         """Estimates for ``B_traj`` trajectories at once, at u = u_bar with every sample
         present: the linear recursion z' = A z + B y first, then one large decode (what
@@ -200,7 +200,7 @@ class KKLObserver(Estimator):
         """
         ys = np.asarray(ys, dtype=float)
         if not usable_mask(self.system, ys).all():
-            raise ObserverError("run_batch needs every sample usable: step a run with "
+            raise ObserverError("run_trajectories needs every sample usable: step a run with "
                                 "missing samples through update and predict")
         n_steps, n_traj, _ = ys.shape
         guess = self.system.domain_center if x0 is None else x0

@@ -20,10 +20,10 @@ import numpy as np
 
 from ledsim.config import LinkConstants
 from ledsim.estimators import build_estimator
+from ledsim.outputs import atomic_write_text
 from ledsim.paper.model import LEDLinkModel
 from ledsim.paper.scenarios import Noise, get_scenario, run
 from ledsim.presets import DEFAULT_RATES, observer_preset
-from observer.atomic import atomic_write_text
 from observer.kkl import KKLDesign, series_encoder
 from observer.metrics import converged, rmse
 from observer.training import TrainingConfig, train_kkl

@@ -27,11 +27,11 @@ import numpy as np
 import torch
 
 from ledsim.config import LinkConstants
+from ledsim.outputs import atomic_write_text
 from ledsim.paper.evaluate import default_checkpoint
 from ledsim.paper.model import LEDLinkModel
 from ledsim.presets import observer_preset
 from observer import checkpoint
-from observer.atomic import atomic_write_text
 from observer.baselines import ExtendedKalmanFilter, ParticleFilter, UnscentedKalmanFilter
 from observer.training import train_kkl
 
@@ -57,11 +57,11 @@ def batched_throughput(obs, n_traj=1024, n_steps=200, dtype=np.float32) -> float
     rng = np.random.default_rng(0)
     x = obs.system.sample_domain(rng, n_traj * n_steps)
     ys = obs.system.h(x).reshape(n_steps, n_traj, -1)
-    obs.run_batch(ys[:10], dtype=dtype)  # warm up
+    obs.run_trajectories(ys[:10], dtype=dtype)  # warm up
     best = np.inf
     for _ in range(3):
         t0 = time.perf_counter()
-        obs.run_batch(ys, dtype=dtype)
+        obs.run_trajectories(ys, dtype=dtype)
         best = min(best, time.perf_counter() - t0)
     return n_traj * n_steps / best
 
@@ -99,7 +99,7 @@ def physics_floor(seconds: float = 10.0, repeats: int = 5) -> tuple[float, float
     n = int(round(seconds / world.config.constants.Te))
     geom, dist = np.zeros(n_rays, dtype=np.int32), np.zeros(n_rays)
     dirs = np.tile([1.0, 0.0, 0.0], n_rays)
-    body = world._gimbal
+    body = world.ids.gimbal_body
     best = np.inf
     for _ in range(repeats):
         world.reset(0.1)

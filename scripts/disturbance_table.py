@@ -20,9 +20,9 @@ from pathlib import Path
 
 from ledsim.loop.config import LOOP_ESTIMATORS, RunConfig
 from ledsim.loop.report import TABLE_HEADER, format_summary, run_many
+from ledsim.outputs import atomic_write_text
 from ledsim.physics.scene import INTEGRATORS
 from ledsim.results import to_jsonable, write_json
-from observer.atomic import atomic_write_text
 
 ROOT = Path(__file__).resolve().parent.parent
 

@@ -26,9 +26,9 @@ from pathlib import Path
 import numpy as np
 from bench import closed_loop_speed, world_speed  # scripts/ is sys.path[0]
 
+from ledsim.outputs import atomic_write_text
 from ledsim.physics.scene import WorldConfig
 from ledsim.physics.world import LinkWorld
-from observer.atomic import atomic_write_text
 
 ROOT = Path(__file__).resolve().parent.parent
 NAMES = ("implicitfast", "euler")

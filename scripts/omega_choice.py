@@ -16,7 +16,7 @@ import numpy as np
 
 from ledsim.loop.closed_loop import run_once
 from ledsim.loop.config import RunConfig
-from observer.atomic import atomic_write_text
+from ledsim.outputs import atomic_write_text
 
 ROOT = Path(__file__).resolve().parent.parent
 

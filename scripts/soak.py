@@ -65,7 +65,7 @@ def main() -> int:
     summary = {"hostile_cases": tried, "handled": tried - failed,
                "property_examples": examples, "property_tests_failed": prop_failed,
                "other_cases": tests, "scale": args.scale, "streams": args.streams}
-    from observer.atomic import atomic_write_text
+    from ledsim.outputs import atomic_write_text
 
     atomic_write_text(ROOT / "out" / "soak.json", json.dumps(summary, indent=2) + "\n")
     print(f"hostile cases tried: {tried}, handled: {tried - failed} "

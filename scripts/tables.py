@@ -14,8 +14,8 @@ import argparse
 import json
 from pathlib import Path
 
+from ledsim.outputs import atomic_write_text
 from ledsim.paper.evaluate import EvaluationConfig, evaluate, paper_reference, write_outputs
-from observer.atomic import atomic_write_text
 
 ROOT = Path(__file__).resolve().parent.parent
 CASES = {

@@ -7,10 +7,10 @@ from __future__ import annotations
 import argparse
 
 from ledsim.config import LinkConstants
+from ledsim.outputs import save_checkpoint
 from ledsim.paper.evaluate import default_checkpoint
 from ledsim.paper.model import LEDLinkModel
 from ledsim.presets import observer_preset
-from observer import checkpoint
 from observer.training import train_kkl
 
 
@@ -29,7 +29,7 @@ def main() -> None:
         system = LEDLinkModel(LinkConstants(distance=d))
         design, cfg = observer_preset(design_name, system.Te)
         obs, rep = train_kkl(system, design, cfg)
-        path = checkpoint.save(obs, default_checkpoint(d, design_name))
+        path = save_checkpoint(obs, default_checkpoint(d, design_name))
         print(f"{design_name:8s} d={d:<6g} {rep.seconds:6.1f} s  L_dyn={rep.loss_dyn:.2e} "
               f"L_recon={rep.loss_recon:.2e} -> {path}")
 

@@ -1,5 +1,5 @@
-"""Train the KKL observer on the MuJoCo world (data-driven: transitions from setting
-MuJoCo's state and stepping it) and save it to assets/checkpoints/kkl_mujoco_d<d>.pt.
+"""Train the shipped KKL observers of the MuJoCo world (``ledsim train --world mujoco``)
+into assets/checkpoints/kkl_mujoco_d<d>.pt.
 
     python scripts/train_mujoco.py [--distances 0.085] [--noise-scales 1] [--samples 200000]
 
@@ -13,19 +13,12 @@ from __future__ import annotations
 
 import argparse
 import os
-import time
-
-import numpy as np
 
 from ledsim.cli.options import WORKERS
-from ledsim.config import LinkConstants
-from ledsim.loop.estimation import BANK_NOISE, REFERENCE_DISTANCE, bank_preset, noisier
-from ledsim.physics.scene import WorldConfig
-from ledsim.physics.system import GimbalSystem
-from ledsim.presets import observer_preset
+from ledsim.loop.estimation import BANK_NOISE, REFERENCE_DISTANCE
+from ledsim.loop.training import train_mujoco_observer
+from ledsim.outputs import save_checkpoint
 from ledsim.resources import shipped_checkpoint
-from observer import checkpoint
-from observer.training import generate_transitions, train_kkl
 
 
 def main() -> None:
@@ -42,24 +35,12 @@ def main() -> None:
     if args.bank:
         args.distances, args.noise_scales = [REFERENCE_DISTANCE], list(BANK_NOISE)
     for d, s in [(d, s) for d in args.distances for s in args.noise_scales]:
-        system = GimbalSystem(noisier(WorldConfig(constants=LinkConstants(distance=d)), s),
-                              threads=args.threads)
-        # The default preset also at d = 0.2 without a bank: the low-light one lost the
-        # link in the closed loop (availability 0.11 against 0.67; docs/physics.md).
-        design, cfg = observer_preset(bank_preset(s), system.Te)
-        cfg.n_samples = args.samples
-        t0 = time.perf_counter()
-        data = generate_transitions(system, cfg.n_samples, cfg.u_bar,
-                                    np.random.default_rng(cfg.seed))
-        t_data = time.perf_counter() - t0
-        system.close()
-        obs, rep = train_kkl(system, design, cfg, data=data)
-        path = checkpoint.save(obs, shipped_checkpoint(d, "mujoco", noise=s), extra={
-            "data": {"source": "MuJoCo (set state, step Te)", "seconds": t_data}})
-        print(f"d={d:g}, noise x{s:g}: {args.samples} MuJoCo transitions in {t_data:.0f} s, "
-              f"training "
-              f"{rep.seconds:.0f} s, L_dyn={rep.loss_dyn:.2e}, L_recon={rep.loss_recon:.2e}"
-              f" -> {path}")
+        obs, rep, extra = train_mujoco_observer(d, s, samples=args.samples,
+                                                threads=args.threads)
+        path = save_checkpoint(obs, shipped_checkpoint(d, "mujoco", noise=s), extra=extra)
+        print(f"d={d:g}, noise x{s:g}: {args.samples} MuJoCo transitions in "
+              f"{extra['data']['seconds']:.0f} s, training {rep.seconds:.0f} s, "
+              f"L_dyn={rep.loss_dyn:.2e}, L_recon={rep.loss_recon:.2e} -> {path}")
 
 
 if __name__ == "__main__":

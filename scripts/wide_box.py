@@ -19,10 +19,10 @@ from ledsim.config import LinkConstants
 from ledsim.loop.closed_loop import run_once
 from ledsim.loop.config import RunConfig
 from ledsim.loop.report import run_many
+from ledsim.outputs import save_checkpoint
 from ledsim.physics import system as physics_system
 from ledsim.physics.scene import WorldConfig
 from ledsim.presets import observer_preset
-from observer import checkpoint
 from observer.training import generate_transitions, train_kkl
 
 CASES = {"undisturbed": (), "vibration 1 Hz high": ("vibration:frequency=1,torque=1,force=4",)}
@@ -56,7 +56,7 @@ def main() -> None:
     data = generate_transitions(system, cfg.n_samples, cfg.u_bar,
                                 np.random.default_rng(cfg.seed))
     obs, rep = train_kkl(system, design, cfg, data=data, progress=False)
-    path = checkpoint.save(obs, f"out/wide_box/kkl_{args.phi:g}_{args.rate:g}.pt")
+    path = save_checkpoint(obs, f"out/wide_box/kkl_{args.phi:g}_{args.rate:g}.pt")
     print(f"box |phi| <= {args.phi:g}, |phidot| <= {args.rate:g}: trained in "
           f"{rep.seconds:.0f} s, L_recon {rep.loss_recon:.2e}")
     for name, dist in CASES.items():

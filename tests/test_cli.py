@@ -1,4 +1,6 @@
 import json
+import subprocess
+import sys
 
 import pytest
 from conftest import assert_user_error, run_cli
@@ -248,3 +250,29 @@ def test_blas_threads_are_pinned_before_numpy_loads_except_for_training(command,
     out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True,
                          env=env, check=True).stdout.strip()
     assert out == expected
+
+
+def test_train_world_mujoco_makes_an_observer_that_run_loads(tmp_path):
+    out = tmp_path / "m.pt"
+    r = run_cli("train", "--world", "mujoco", "--samples", "2000", "-q", "--out", str(out))
+    assert r.returncode == 0, r.stderr
+    meta = json.loads(out.with_suffix(".json").read_text())
+    assert meta["data"]["source"].startswith("MuJoCo") and meta["system"]["class"] == \
+        "GimbalSystem"
+    r = run_cli("run", "--checkpoint", str(out), "--seeds", "1", "--seconds", "1",
+                "--workers", "1", "--no-plot", "-q", "--out", str(tmp_path / "o"))
+    assert r.returncode == 0, r.stderr
+
+
+def test_outputs_follow_the_umask(tmp_path):
+    import os
+    import stat
+
+    env = {**os.environ, "MUJOCO_GL": "osmesa"}
+    r = subprocess.run(["sh", "-c", "umask 022 && exec \"$0\" -m ledsim.cli run --seeds 1 "
+                        "--seconds 1 --workers 1 -q --out \"$1\"", sys.executable,
+                        str(tmp_path / "o")], capture_output=True, text=True, env=env)
+    assert r.returncode == 0, r.stderr
+    assert stat.S_IMODE((tmp_path / "o").stat().st_mode) == 0o755
+    for f in (tmp_path / "o").iterdir():
+        assert stat.S_IMODE(f.stat().st_mode) == 0o644, f

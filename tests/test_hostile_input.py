@@ -47,3 +47,26 @@ def test_train_checks_its_output_before_training(tmp_path):
 def test_disturbance_keys_have_physical_ranges(spec):
     with pytest.raises(DisturbanceError, match=spec.split(":")[1].split("=")[0]):
         parse_disturbance(spec)
+
+
+class _Payload:
+    def __init__(self, marker):
+        self.marker = marker
+
+    def __reduce__(self):
+        import os
+
+        return (os.system, (f"touch {self.marker}",))
+
+
+@pytest.mark.parametrize("protocol", [2, 4])
+def test_a_pickle_with_a_payload_is_refused_in_one_line(tmp_path, protocol):
+    import pickle
+
+    marker = tmp_path / "pwned"
+    evil = tmp_path / "evil.pt"
+    evil.write_bytes(pickle.dumps(_Payload(marker), protocol=protocol))
+    r = run_cli("evaluate", "--scenario", "if1", "--seeds", "1", "--checkpoint", str(evil),
+                "--out", str(tmp_path / "out"))
+    assert_user_error(r, "evil.pt")
+    assert not marker.exists() and not (tmp_path / "out").exists()

@@ -55,8 +55,7 @@ def test_two_renders_to_one_file_never_share_a_temporary(tmp_path):
 def test_a_swallowed_interrupt_still_commits_nothing(tmp_path):
     # Python ignores a KeyboardInterrupt raised in some callbacks (an import lock's), so
     # the work can finish after a Ctrl-C: the flag the handler sets stops the commit.
-    from ledsim.outputs import output_folder
-    from observer.atomic import INTERRUPTED, atomic_write_text
+    from ledsim.outputs import INTERRUPTED, atomic_write_text, output_folder
 
     INTERRUPTED.set()
     try:

@@ -97,7 +97,7 @@ def test_noise_free_observer_converges_from_the_domain_centre(tiny_observer, sys
 
 def test_batched_run_equals_step_by_step(tiny_observer, system, rng):
     ys = system.h(system.sample_domain(rng, 60)).reshape(20, 3, 2)
-    batch_free = tiny_observer.run_batch(ys)
+    batch_free = tiny_observer.run_trajectories(ys)
     for j in range(3):
         tiny_observer.reset()
         for k in range(20):
@@ -114,10 +114,10 @@ def test_omega_correction_vanishes_at_u_bar_and_helps_under_input(tiny_observer,
     noise.measurement[:] = 0
     errs = {}
     for flag in (True, False):
-        tiny_observer.omega = flag
+        tiny_observer.use_omega = flag
         out = run(system, sc, tiny_observer, noise)
         errs[flag] = rmse(out.xhat, out.x, sc.steady_step(system.Te))[1]
-    tiny_observer.omega = True
+    tiny_observer.use_omega = True
     assert errs[True] < errs[False]
 
 
@@ -142,7 +142,7 @@ def test_missing_measurements_never_enter_z(tiny_observer, system, bad):
         tiny_observer.predict(0.0)
     # ... and the batched path, which has no hold, refuses them.
     with pytest.raises(ObserverError, match="every sample usable"):
-        tiny_observer.run_batch(ys[:, None, :])
+        tiny_observer.run_trajectories(ys[:, None, :])
 
 
 def test_handover_seeds_the_slow_bank_from_the_fast_estimate():

@@ -116,3 +116,56 @@ def test_torch_is_imported_only_when_needed():
                         "from ledsim.loop.closed_loop import run_once\n"
                         "from ledsim.loop.config import RunConfig\n"
                         "run_once(RunConfig(estimator='ekf', seconds=0.1), 0)\n")
+
+
+def _project_modules():
+    for pkg in ("ledsim", "observer"):
+        for path in sorted((ROOT / pkg).rglob("*.py")):
+            yield module_name(path), path
+
+
+def test_no_import_cycle():
+    """No module imports itself back through others (imports inside functions count)."""
+    names = {name for name, _ in _project_modules()}
+    graph = {}
+    for name, path in _project_modules():
+        deps = set()
+        for n in imports_of(path):
+            while n and n not in names:  # ``from pkg import name``: the module is pkg
+                n = n.rpartition(".")[0]
+            if n and n != name and not name.startswith(n + "."):
+                deps.add(n)
+        graph[name] = deps - {n for n in deps if n.count(".") == 0}  # package roots
+    state: dict[str, int] = {}
+
+    def visit(node, stack):
+        state[node] = 1
+        for dep in graph.get(node, ()):
+            if state.get(dep) == 1:
+                cycle = stack[stack.index(dep):] + [dep]
+                if not all(m.endswith("__init__") or m in ("ledsim", "observer")
+                           for m in cycle[:-1]):
+                    raise AssertionError(" -> ".join(cycle))
+            elif state.get(dep) is None:
+                visit(dep, stack + [dep])
+        state[node] = 2
+
+    for node in sorted(graph):
+        if node not in state:
+            visit(node, [node])
+
+
+def test_link_world_privates_stay_in_world_py():
+    """Other modules read the world through its named accessors and ``world.ids``."""
+    import re
+
+    pattern = re.compile(r"\b(world|w0|w|wd)\._(?!_)[a-z]")
+    bad = []
+    for pkg in ("ledsim", "observer", "scripts"):
+        for path in sorted((ROOT / pkg).rglob("*.py")):
+            if path.name == "world.py":
+                continue
+            for k, line in enumerate(path.read_text().splitlines(), 1):
+                if pattern.search(line):
+                    bad.append(f"{path.relative_to(ROOT)}:{k}: {line.strip()}")
+    assert not bad, "\n".join(bad)

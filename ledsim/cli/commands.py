@@ -12,19 +12,25 @@ import os
 import time
 from pathlib import Path
 
+from ..config import PAPER_DISTANCE
 from ..errors import LedsimError
-from ..outputs import check_out_dir, check_out_file, output_folder
+from ..outputs import check_out_dir, check_out_file, output_folder, save_checkpoint
 
 log = logging.getLogger("ledsim")
 
 
-def _loop_config(args, **kw):
-    from ..loop.config import RunConfig
+def _loop_config(args, **given):
+    """The run of a command line: each part of the experiment from the flags it has (a
+    part's own default for the flags a command does not take), validated."""
+    from dataclasses import fields
 
-    cfg = RunConfig(scenario=args.scenario, estimator=args.estimator,
-                    disturbances=tuple(args.disturbance), distance=args.distance,
-                    scene=args.scene, supervision=not args.no_supervision,
-                    integrator=args.integrator, **kw)
+    from ..loop.config import PARTS, RunConfig
+
+    values = {**vars(args), "disturbances": tuple(args.disturbance),
+              "supervision": not args.no_supervision, **given}
+    parts = {name: kind(**{f.name: values[f.name] for f in fields(kind) if f.name in values})
+             for name, kind in PARTS.items()}
+    cfg = RunConfig.of(**parts)
     cfg.validate()
     return cfg
 
@@ -73,10 +79,7 @@ def simulate(args) -> int:
 def run(args) -> int:
     from ..loop.report import TABLE_HEADER, format_summary, run_seeds, write_run, write_traces
 
-    cfg = _loop_config(args, torque_limit=args.torque_limit, noise_scale=args.noise_scale,
-                       seeds=args.seeds, particles=args.particles,
-                       checkpoint=args.checkpoint, omega_model=args.omega_model,
-                       workers=args.workers, seconds=args.seconds)
+    cfg = _loop_config(args)
     out = check_out_dir(args.out)
     summary, outs = run_seeds(cfg, progress=not args.quiet, all_traces=args.save_trace)
     with output_folder(out) as tmp:
@@ -92,10 +95,9 @@ def run(args) -> int:
 
 def demo(args) -> int:
     """Align the receiver from 0.3 rad off with each estimator; print one table."""
-    from observer.atomic import atomic_write_text
-
     from ..loop.config import LOOP_ESTIMATORS, RunConfig
     from ..loop.report import TABLE_HEADER, format_summary, run_many, write_run
+    from ..outputs import atomic_write_text
     from ..results import write_json
 
     out = check_out_dir(args.out)
@@ -171,22 +173,29 @@ def evaluate(args) -> int:
 
 
 def train(args) -> int:
-    from observer import checkpoint
-    from observer.training import train_kkl
-
-    from ..config import LinkConstants
-    from ..paper.model import LEDLinkModel
-    from ..presets import observer_preset
-
     check_out_file(args.out, ".pt")
-    system = LEDLinkModel(LinkConstants(distance=args.distance))
-    design, config = observer_preset(args.design, system.Te)
-    config.n_samples = args.samples
-    config.seed = args.seed
-    obs, report = train_kkl(system, design, config, progress=not args.quiet)
-    path = checkpoint.save(obs, args.out)
-    log.info(f"trained {args.design} observer in {report.seconds:.1f} s: "
-          f"L_dyn={report.loss_dyn:.2e}, L_recon={report.loss_recon:.2e}; wrote {path}")
+    if args.world == "mujoco":
+        from ..loop.training import train_mujoco_observer
+
+        obs, report, extra = train_mujoco_observer(args.distance, args.noise_scale,
+                                                   args.design, args.samples, args.seed,
+                                                   args.threads, progress=not args.quiet)
+    else:
+        from observer.training import train_kkl
+
+        from ..config import LinkConstants
+        from ..paper.model import LEDLinkModel
+        from ..presets import observer_preset
+
+        system = LEDLinkModel(LinkConstants(distance=args.distance))
+        design, config = observer_preset(args.design or "default", system.Te)
+        config.n_samples, config.seed = args.samples, args.seed
+        obs, report = train_kkl(system, design, config, progress=not args.quiet)
+        extra = {}
+    path = save_checkpoint(obs, args.out, extra=extra)
+    log.info(f"trained {args.design or 'default'} observer ({args.world}) in "
+             f"{report.seconds:.1f} s: "
+             f"L_dyn={report.loss_dyn:.2e}, L_recon={report.loss_recon:.2e}; wrote {path}")
     return 0
 
 
@@ -201,7 +210,7 @@ def sweep(args) -> int:
                      supervision=not args.no_supervision, integrator=args.integrator)
     grid = SweepGrid(estimators=args.estimator or ["kkl"],
                      disturbances=args.disturbance or ["none"],
-                     distances=args.distance or [0.085],
+                     distances=args.distance or [PAPER_DISTANCE],
                      noise_scales=args.noise_scale or [1.0], seeds=args.seeds, base=base)
     out = check_out_dir(args.out)
     t0 = time.perf_counter()

@@ -42,7 +42,7 @@ from gymnasium import spaces
 
 from ..config import LinkConstants
 from ..loop.closed_loop import control_step, identified_model, run_supervisor, start_world
-from ..loop.config import RunConfig
+from ..loop.config import RunConfig, TaskPart, WorldPart
 from ..loop.gate import DropoutGate
 from ..optics import peak_power
 from ..physics.sensor import SensorReading
@@ -73,21 +73,22 @@ class LinkAlignEnv(gym.Env):
 
     metadata = {"render_modes": ["rgb_array"], "render_fps": 100}
 
-    def __init__(self, scenario: str | None = None, distance: float = 0.085,
-                 noise_scale: float = 1.0, disturbances: tuple[str, ...] = (),
-                 torque_limit: float = 0.05, frame_skip: int = 5, phi0_range: float = 0.3,
-                 render_mode: str | None = None, width: int = 640, height: int = 480,
-                 camera: str = "side", integrator: str = "implicitfast",
-                 scene: str | None = None):
+    def __init__(self, scenario: str | None = None, distance: float = WorldPart.distance,
+                 noise_scale: float = WorldPart.noise_scale,
+                 disturbances: tuple[str, ...] = (),
+                 torque_limit: float = WorldPart.torque_limit, frame_skip: int = 5,
+                 phi0_range: float = 0.3, render_mode: str | None = None, width: int = 640,
+                 height: int = 480, camera: str = "side",
+                 integrator: str = WorldPart.integrator, scene: str | None = None):
         if render_mode not in (None, "rgb_array"):
             raise ValueError(f"render_mode={render_mode!r}: use None or 'rgb_array'")
         if int(frame_skip) < 1:
             raise ValueError(f"frame_skip={frame_skip!r}: must be >= 1")
         if isinstance(disturbances, str):
             disturbances = (disturbances,)
-        self.cfg = RunConfig(scenario=scenario or "align", disturbances=tuple(disturbances),
-                             distance=distance, torque_limit=torque_limit,
-                             noise_scale=noise_scale, integrator=integrator, scene=scene)
+        self.cfg = RunConfig.of(
+            WorldPart(distance, torque_limit, noise_scale, scene, integrator),
+            TaskPart(scenario=scenario or TaskPart.scenario, disturbances=tuple(disturbances)))
         self.cfg.validate()
         world_config = self.cfg.world_config()
         Te = world_config.timestep * int(frame_skip)

@@ -137,13 +137,8 @@ class LoopRun:
         return torque
 
     def result(self, times: np.ndarray) -> SimulationResult:
-        geo = self.geo
-        return SimulationResult(
-            t=times, phi=self.state[:, 0], phidot=self.state[:, 1],
-            gimbal_angle=self.gimbal[:, 0], gimbal_rate=self.gimbal[:, 1],
-            torque=self.applied, power=self.power, power_clean=self.clean,
-            incidence_angle=geo[:, 2], emission_angle=geo[:, 1], distance=geo[:, 0],
-            visible_fraction=geo[:, 3], occluded=geo[:, 3] < 1.0, hull_pos=self.hull)
+        return SimulationResult.from_steps(times, self.geo, self.state, self.gimbal,
+                                           self.applied, self.power, self.clean, self.hull)
 
 
 class ClosedLoop:

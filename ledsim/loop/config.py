@@ -13,9 +13,9 @@ paper-closed-loop   start at 0.2 rad; the paper's u = -0.001 phidot_hat
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass
+from dataclasses import asdict, dataclass, fields
 
-from ..config import LinkConstants
+from ..config import PAPER_DISTANCE, LinkConstants
 from ..control import AlignmentPID, Excitation, PaperRateDamping
 from ..errors import LedsimError
 from ..estimators import ESTIMATORS
@@ -43,45 +43,133 @@ LOOP_ESTIMATORS = tuple(n for n in ESTIMATORS if n not in ("kkl-paper", "kkl-han
 OMEGA_MODELS = ("identified", "simulator", "none")
 
 
-@dataclass
-class RunConfig:
-    """Everything one ``ledsim run`` needs (all plain data, so it pickles to workers).
+@dataclass(frozen=True)
+class WorldPart:
+    """The MuJoCo world of an experiment.
 
     Attributes:
-        scenario: a key of :data:`PHYSICS_SCENARIOS`.
-        estimator: a key of :data:`LOOP_ESTIMATORS`.
-        disturbances: disturbance specs ``name[:key=value,...]``.
         distance: link distance d [m].
         torque_limit: gimbal motor torque limit [N m].
         noise_scale: multiplies the measurement-noise standard deviation [-].
-        seeds: Monte-Carlo runs (seeds 0..seeds-1).
-        particles: particle-filter size.
-        checkpoint: KKL checkpoint (None: the shipped one for the distance).
-        omega_model: f of the KKL's Omega correction: the identified one-step model,
-            the simulator itself, or none.
-        workers: processes.
-        seconds: length of a run [s] (None: the scenario's).
         scene: MJCF scene file (None: the shipped one).
-        integrator: MuJoCo integrator of the world (``implicitfast`` or ``euler``, ...).
+        integrator: MuJoCo integrator of the world (``implicitfast``, ``euler``, ...).
+    """
+
+    distance: float = PAPER_DISTANCE
+    torque_limit: float = 0.05
+    noise_scale: float = 1.0
+    scene: str | None = None
+    integrator: str = "implicitfast"
+
+    def world_config(self, distance: float | None = None) -> WorldConfig:
+        """The MuJoCo world (at ``distance`` [m] instead, when given); its control period
+        Te is the link constants' (5 physics steps of 2 ms)."""
+        extra = {} if self.scene is None else {"xml": self.scene}
+        d = self.distance if distance is None else distance
+        return WorldConfig(constants=LinkConstants(distance=d),
+                           torque_limit=self.torque_limit, integrator=self.integrator,
+                           **extra)
+
+
+@dataclass(frozen=True)
+class TaskPart:
+    """What an experiment asks of the loop.
+
+    Attributes:
+        scenario: a key of :data:`PHYSICS_SCENARIOS`.
+        disturbances: disturbance specs ``name[:key=value,...]``.
+        seconds: length of a run [s] (None: the scenario's).
         supervision: watch the estimate, flag a lost link and reacquire it with a scan
             (:mod:`ledsim.loop.supervisor`); off: the estimator alone drives the motor.
     """
 
     scenario: str = "align"
-    estimator: str = "kkl"
     disturbances: tuple[str, ...] = ()
-    distance: float = 0.085
-    torque_limit: float = 0.05
-    noise_scale: float = 1.0
-    seeds: int = 4
+    seconds: float | None = None
+    supervision: bool = True
+
+
+@dataclass(frozen=True)
+class EstimatorPart:
+    """The estimator of an experiment.
+
+    Attributes:
+        estimator: a key of :data:`LOOP_ESTIMATORS`.
+        particles: particle-filter size.
+        checkpoint: KKL checkpoint (None: the shipped one for the distance).
+        omega_model: f of the KKL's Omega correction: the identified one-step model,
+            the simulator itself, or none.
+    """
+
+    estimator: str = "kkl"
     particles: int = 2000
     checkpoint: str | None = None
     omega_model: str = "identified"
+
+
+@dataclass(frozen=True)
+class ExecutionPart:
+    """How an experiment is run: Monte-Carlo runs (seeds 0..seeds-1) on ``workers``
+    processes. It never changes a seed's numbers."""
+
+    seeds: int = 4
     workers: int = 2
-    seconds: float | None = None
-    scene: str | None = None
-    supervision: bool = True
-    integrator: str = "implicitfast"
+
+
+PARTS = {"world": WorldPart, "task": TaskPart, "estimation": EstimatorPart,
+         "execution": ExecutionPart}
+
+
+@dataclass
+class RunConfig:
+    """Everything one ``ledsim run`` needs: its four parts (:class:`WorldPart`,
+    :class:`TaskPart`, :class:`EstimatorPart`, :class:`ExecutionPart`) in one flat,
+    picklable record, whose defaults are the parts'. Build it from parts with
+    :meth:`of`; read a part back with :attr:`world`, :attr:`task`, :attr:`estimation`
+    and :attr:`execution`."""
+
+    scenario: str = TaskPart.scenario
+    estimator: str = EstimatorPart.estimator
+    disturbances: tuple[str, ...] = TaskPart.disturbances
+    distance: float = WorldPart.distance
+    torque_limit: float = WorldPart.torque_limit
+    noise_scale: float = WorldPart.noise_scale
+    seeds: int = ExecutionPart.seeds
+    particles: int = EstimatorPart.particles
+    checkpoint: str | None = EstimatorPart.checkpoint
+    omega_model: str = EstimatorPart.omega_model
+    workers: int = ExecutionPart.workers
+    seconds: float | None = TaskPart.seconds
+    scene: str | None = WorldPart.scene
+    supervision: bool = TaskPart.supervision
+    integrator: str = WorldPart.integrator
+
+    @classmethod
+    def of(cls, world: WorldPart = WorldPart(), task: TaskPart = TaskPart(),
+           estimation: EstimatorPart = EstimatorPart(),
+           execution: ExecutionPart = ExecutionPart()) -> RunConfig:
+        """The run made of these parts."""
+        return cls(**asdict(world), **asdict(task), **asdict(estimation),
+                   **asdict(execution))
+
+    def _part(self, kind):
+        return kind(**{f.name: getattr(self, f.name) for f in fields(kind)})
+
+    @property
+    def world(self) -> WorldPart:
+        return self._part(WorldPart)
+
+    @property
+    def task(self) -> TaskPart:
+        return self._part(TaskPart)
+
+    @property
+    def estimation(self) -> EstimatorPart:
+        return self._part(EstimatorPart)
+
+    @property
+    def execution(self) -> ExecutionPart:
+        return self._part(ExecutionPart)
 
     def validate(self) -> None:
         for flag, value, registry in (("scenario", self.scenario, PHYSICS_SCENARIOS),
@@ -112,8 +200,4 @@ class RunConfig:
 
     def world_config(self, distance: float | None = None) -> WorldConfig:
         """The MuJoCo world of the run (at ``distance`` [m] instead, when given)."""
-        extra = {} if self.scene is None else {"xml": self.scene}
-        d = self.distance if distance is None else distance
-        return WorldConfig(constants=LinkConstants(distance=d),
-                           torque_limit=self.torque_limit, integrator=self.integrator,
-                           **extra)
+        return self.world.world_config(distance)

@@ -19,6 +19,7 @@ from observer import checkpoint as ckpt
 from observer.bank import ObserverBank
 from observer.baselines import ParticleFilter
 
+from ..config import PAPER_DISTANCE
 from ..estimators import build_estimator
 from ..physics.scene import WorldConfig
 from ..physics.system import GimbalSystem, IdentifiedGimbalModel
@@ -26,7 +27,7 @@ from ..resources import require_shipped_checkpoint
 from .config import RunConfig
 
 #: Distance [m] of the shipped MuJoCo KKL bank that serves every distance.
-REFERENCE_DISTANCE = 0.085
+REFERENCE_DISTANCE = PAPER_DISTANCE
 #: The bank's members: measurement noise over the nominal [-] and observer preset.
 #: Rescaled to the reference gain, the nominal noise is about 6x at d = 0.2 m and 13x at
 #: 0.3 m; the slower filters of the low-light preset pay off only on the weakest link.
@@ -126,7 +127,7 @@ def loop_estimator(cfg: RunConfig, system: GimbalSystem, model: IdentifiedGimbal
         omega_f = identified_model(ref)
     observers = [build_estimator("kkl", ref if m.world == first else member_system(m.world),
                                  model=omega_f, checkpoint=m.checkpoint,
-                                 omega=cfg.omega_model != "none") for m in members]
+                                 use_omega=cfg.omega_model != "none") for m in members]
     if len(observers) == 1:
         return observers[0], ref
     # A switch waits 2 s: a vibrating hull moves the gain for a moment, not for good.

@@ -9,10 +9,10 @@ from pathlib import Path
 
 import numpy as np
 
-from observer.atomic import atomic_write_bytes
 from observer.metrics import mean_and_spread
 
 from ..montecarlo import run_jobs
+from ..outputs import atomic_write_bytes
 from ..results import DictAccess, write_json
 from .closed_loop import RunOutcome, Trace, check_checkpoint, run_batch
 from .config import RunConfig

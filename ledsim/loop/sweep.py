@@ -26,9 +26,8 @@ from collections.abc import Sequence
 from dataclasses import asdict, dataclass, replace
 from pathlib import Path
 
-from observer.atomic import atomic_write_text
-
 from ..errors import LedsimError
+from ..outputs import atomic_write_text
 from ..results import to_jsonable
 from .config import RunConfig
 from .report import Stat
@@ -183,7 +182,7 @@ class SweepStore:
     def write_tables(self, rows: list[dict], plot: bool = True) -> list[Path]:
         paths = [self.out / "results.csv", self.out / "summary.csv"]
         atomic_write_text(paths[0], _csv(rows, COLUMNS))
-        summary = summarize(rows)
+        summary = summarize_rows(rows)
         atomic_write_text(paths[1], _csv(summary, tuple(summary[0])))
         if plot:
             from ..plotting import plot_sweep
@@ -202,7 +201,7 @@ def _csv(rows: list[dict], columns: Sequence[str]) -> str:
     return buf.getvalue()
 
 
-def summarize(rows: list[dict]) -> list[dict]:
+def summarize_rows(rows: list[dict]) -> list[dict]:
     """Mean and spread (sample std) over seeds of each metric, per combination."""
     groups: dict[tuple, list[dict]] = {}
     keys = ("scenario", "estimator", "disturbance", "distance", "noise_scale")

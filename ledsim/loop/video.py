@@ -55,7 +55,7 @@ def render_video(cfg: RunConfig, seed: int, out: Path, spec: VideoSpec,
         if still is not None and recorder and recorder[0].last_frame is not None:
             from PIL import Image
 
-            from observer.atomic import atomic_write_bytes
+            from ..outputs import atomic_write_bytes
 
             frame = recorder[0].last_frame
             atomic_write_bytes(Path(still), lambda tmp: Image.fromarray(frame).save(

@@ -12,13 +12,13 @@ from pathlib import Path
 
 import numpy as np
 
-from observer.atomic import atomic_write_text
 from observer.metrics import converged, mean_and_spread, rmse
 
 from ..config import LinkConstants
 from ..errors import LedsimError
 from ..estimators import build_estimator
 from ..montecarlo import run_jobs
+from ..outputs import atomic_write_text
 from ..resources import require_shipped_checkpoint, shipped_checkpoint
 from ..results import DictAccess, write_json
 from .model import LEDLinkModel

@@ -39,12 +39,13 @@ class WorldBatch:
         n = len(self.worlds)
         w0 = self.worlds[0]
         m = w0.model
-        self._sites = np.array([w0._pd[0], w0._pd[1], w0._led])
-        self._gimbal = w0._gimbal
-        self._root = int(m.body_rootid[w0._gimbal])
+        ids = w0.ids
+        self._sites = np.array([*ids.photodiode_sites, ids.led_site])
+        self._gimbal = ids.gimbal_body
+        self._root = int(m.body_rootid[ids.gimbal_body])
         # Geoms that block light (groups 0-2, not the gimbal): planes, and the others
         # with their bounding radius (none: no bound, so rays always).
-        blocking = (m.geom_group < 3) & (m.geom_bodyid != w0._gimbal) & \
+        blocking = (m.geom_group < 3) & (m.geom_bodyid != ids.gimbal_body) & \
             (RAY_GROUPS[np.minimum(m.geom_group, 5)] > 0)
         plane = m.geom_type == mujoco.mjtGeom.mjGEOM_PLANE
         self.planes = np.flatnonzero(blocking & plane)
@@ -95,11 +96,11 @@ class WorldBatch:
             (self.gimbal_mat, [d.xmat[g] for d in ds]),
             (self.gimbal_cvel, [d.cvel[g] for d in ds]),
             (self.root_com, [d.subtree_com[r] for d in ds]),
-            (self._qpos_hinge, [d.qpos[w._hinge_qpos:w._hinge_qpos + 1]
+            (self._qpos_hinge, [d.qpos[w.ids.hinge_qpos:w.ids.hinge_qpos + 1]
                                 for w, d in zip(ws, ds, strict=True)]),
-            (self._qvel_hinge, [d.qvel[w._hinge_dof:w._hinge_dof + 1]
+            (self._qvel_hinge, [d.qvel[w.ids.hinge_dof:w.ids.hinge_dof + 1]
                                 for w, d in zip(ws, ds, strict=True)]),
-            (self.hull_pos, [d.xpos[w._auv] for w, d in zip(ws, ds, strict=True)]),
+            (self.hull_pos, [d.xpos[w.ids.hull_body] for w, d in zip(ws, ds, strict=True)]),
             (self.geom_xpos, [d.geom_xpos for d in ds]),
             (self.transmitter_velocity, [w.transmitter_velocity for w in ws])] + [
             (self._plane_mat[j], [d.geom_xmat[p] for d in ds])

@@ -137,6 +137,6 @@ class BatchSensor:
         los = b.site_pos[:, 2] - b.site_pos[:, 0]
         rel = b.transmitter_velocity - lin
         d2 = dot3(los, los)
-        omega_los = dot3(cross3(los, rel), b.hinge_axis) / d2
-        return omega_los - dot3(ang, b.hinge_axis)
+        los_rate = dot3(cross3(los, rel), b.hinge_axis) / d2
+        return los_rate - dot3(ang, b.hinge_axis)
 

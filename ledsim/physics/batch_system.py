@@ -58,8 +58,8 @@ class GimbalBatch:
         worlds[0].reset()  # the state every transition starts from, but the gimbal's
         self._home = np.empty(mujoco.mj_stateSize(m, FULL))
         mujoco.mj_getState(m, worlds[0].data, self._home, FULL)
-        self._iq = 1 + world._hinge_qpos  # state = (time, qpos, qvel, ...)
-        self._iv = 1 + m.nq + world._hinge_dof
+        self._iq = 1 + world.ids.hinge_qpos  # state = (time, qpos, qvel, ...)
+        self._iv = 1 + m.nq + world.ids.hinge_dof
         self._substeps = world.config.substeps
 
     def close(self) -> None:
@@ -87,7 +87,7 @@ class GimbalBatch:
             part = slice(a, min(a + self.ROLLOUT_BLOCK, len(states)))
             x0 = self._starts(states[part])
             ctrl = np.zeros((len(x0), 1, m.nu))
-            ctrl[:, 0, w._motor] = np.clip(torques[part], -lim, lim)
+            ctrl[:, 0, w.ids.motor] = np.clip(torques[part], -lim, lim)
             end = self._rollout.rollout(m, self._datas, x0, ctrl,
                                         nstep=self._substeps)[0][:, -1]
             # An unstable substep makes MuJoCo reset the data (time back to 0).

@@ -21,10 +21,9 @@ import mujoco
 import numpy as np
 from PIL import Image, ImageDraw, ImageFont
 
-from observer.atomic import INTERRUPTED
-
 from ..errors import LedsimError
 from ..optics import peak_power
+from ..outputs import INTERRUPTED, umask
 from .sensor import SensorReading
 from .world import LinkWorld
 
@@ -213,6 +212,7 @@ class VideoWriter:
         if keep and INTERRUPTED.is_set():  # a swallowed Ctrl-C: keep nothing
             keep = False
         if keep:
+            os.chmod(self.tmp, 0o666 & ~umask())  # mkstemp makes 0600
             os.replace(self.tmp, self.path)
         elif self.tmp.exists():
             self.tmp.unlink()

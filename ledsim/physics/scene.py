@@ -181,3 +181,33 @@ def set_buoyancy(m: mujoco.MjModel, auv: int, gimbal: int, water_density: float)
             volume += 8.0 * float(np.prod(size))
     m.body_gravcomp[auv] = water_density * volume / m.body_mass[auv]
     m.body_gravcomp[gimbal] = 1.0 if water_density > 0 else 0.0
+
+
+@dataclass(frozen=True)
+class SceneIds:
+    """MuJoCo ids and addresses of the scene's named parts, read once when it compiles
+    (for code that works on MuJoCo's arrays directly: the world batch, the rollouts).
+
+    Attributes:
+        hull_body, gimbal_body: body ids of the AUV and of the receiver gimbal.
+        photodiode_sites: site ids of photodiodes 1 and 2; led_site: the LED's site id.
+        hinge_qpos, hinge_dof: the gimbal hinge's address in qpos and in qvel.
+        motor: actuator id of the gimbal motor.
+    """
+
+    hull_body: int
+    gimbal_body: int
+    photodiode_sites: tuple[int, int]
+    led_site: int
+    hinge_qpos: int
+    hinge_dof: int
+    motor: int
+
+    @classmethod
+    def of(cls, m) -> SceneIds:
+        hinge = m.joint("gimbal_hinge")
+        return cls(int(m.body("auv").id), int(m.body("gimbal").id),
+                   (int(m.site("pd1").id), int(m.site("pd2").id)), int(m.site("led").id),
+                   int(hinge.qposadr[0]), int(hinge.dofadr[0]),
+                   int(m.actuator("gimbal_motor").id))
+

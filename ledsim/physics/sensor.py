@@ -182,6 +182,6 @@ class IrradianceSensor:
         rx, ry, rz = tx - vx, ty - vy, tz - vz
         d2 = lx * lx + ly * ly + lz * lz
         hx, hy, hz = w.hinge_axis.tolist()
-        omega_los = ((ly * rz - lz * ry) * hx + (lz * rx - lx * rz) * hy
+        los_rate = ((ly * rz - lz * ry) * hx + (lz * rx - lx * rz) * hy
                      + (lx * ry - ly * rx) * hz) / d2
-        return omega_los - (wx * hx + wy * hy + wz * hz)
+        return los_rate - (wx * hx + wy * hy + wz * hz)

@@ -19,9 +19,8 @@ from pathlib import Path
 import numpy as np
 from tqdm.auto import tqdm
 
-from observer.atomic import atomic_write_bytes
-
 from ..errors import LedsimError
+from ..outputs import atomic_write_bytes
 from .sensor import IrradianceSensor, SensorReading
 from .tick import advance, prepare
 from .world import LinkWorld
@@ -79,6 +78,18 @@ class SimulationResult:
     visible_fraction: np.ndarray
     occluded: np.ndarray
     hull_pos: np.ndarray
+
+    @classmethod
+    def from_steps(cls, t: np.ndarray, geo: np.ndarray, state: np.ndarray,
+                   gimbal: np.ndarray, torque: np.ndarray, power: np.ndarray,
+                   power_clean: np.ndarray, hull: np.ndarray) -> SimulationResult:
+        """From per-step arrays: ``geo`` (N, 4, 2) distance, theta, phi and visible
+        fraction of both photodiodes; ``state`` and ``gimbal`` (N, 2) (value, rate)."""
+        return cls(t=t, phi=state[:, 0], phidot=state[:, 1], gimbal_angle=gimbal[:, 0],
+                   gimbal_rate=gimbal[:, 1], torque=torque, power=power,
+                   power_clean=power_clean, incidence_angle=geo[:, 2],
+                   emission_angle=geo[:, 1], distance=geo[:, 0],
+                   visible_fraction=geo[:, 3], occluded=geo[:, 3] < 1.0, hull_pos=hull)
 
     @property
     def x(self) -> np.ndarray:
@@ -160,12 +171,8 @@ def simulate(world: LinkWorld, sensor: IrradianceSensor, seconds: float,
         gimbal[k] = world.gimbal_angle, world.gimbal_rate
         hull[k] = world.hull_pos
         applied[k] = advance(world, disturbances, u, t0 + (k + 1) * Te)
-    d_, th, ph, vis = geo[:, 0], geo[:, 1], geo[:, 2], geo[:, 3]
-    clean = sensor.clean_power(d_, th, ph, vis)
+    clean = sensor.clean_power(geo[:, 0], geo[:, 1], geo[:, 2], geo[:, 3])
     if power is None:
         power = clean + sensor.rng.standard_normal(clean.shape) * sensor.noise_std
-    return SimulationResult(
-        t=t0 + np.arange(n) * Te, phi=state[:, 0], phidot=state[:, 1],
-        gimbal_angle=gimbal[:, 0], gimbal_rate=gimbal[:, 1], torque=applied,
-        power=power, power_clean=clean, incidence_angle=ph, emission_angle=th,
-        distance=d_, visible_fraction=vis, occluded=vis < 1.0, hull_pos=hull)
+    return SimulationResult.from_steps(t0 + np.arange(n) * Te, geo, state, gimbal, applied,
+                                       power, clean, hull)

@@ -33,7 +33,7 @@ from contextlib import contextmanager
 import mujoco
 import numpy as np
 
-from .scene import SCENE, WorldConfig, WorldError, build_spec, set_buoyancy
+from .scene import SCENE, SceneIds, WorldConfig, WorldError, build_spec, set_buoyancy
 
 __all__ = ["LinkWorld", "WorldConfig", "WorldError", "SCENE"]
 
@@ -78,16 +78,13 @@ class LinkWorld:
         self._substeps, self._dt = self.config.substeps, float(self.model.opt.timestep)
         self._no_autoreset = bool(self.model.opt.disableflags & _AUTORESET_OFF)
         m = self.model
-        self._auv = m.body("auv").id
-        self._gimbal = m.body("gimbal").id
+        #: Named MuJoCo ids and addresses, for code that works on MuJoCo's arrays.
+        self.ids = ids = SceneIds.of(m)
+        self._auv, self._gimbal = ids.hull_body, ids.gimbal_body
         self._tx_mocap = m.body_mocapid[m.body("transmitter").id]
         self._occluder_mocap = m.body_mocapid[m.body("occluder").id]
-        self._pd = (m.site("pd1").id, m.site("pd2").id)
-        self._led = m.site("led").id
-        hinge = m.joint("gimbal_hinge")
-        self._hinge_qpos = hinge.qposadr[0]
-        self._hinge_dof = hinge.dofadr[0]
-        self._motor = m.actuator("gimbal_motor").id
+        self._pd, self._led = ids.photodiode_sites, ids.led_site
+        self._hinge_qpos, self._hinge_dof, self._motor = ids.hinge_qpos, ids.hinge_dof, ids.motor
         self._hull_dof = m.jnt_dofadr[m.body_jntadr[self._auv]]  # the free joint's first dof
         if share_model_of is None:
             set_buoyancy(m, self._auv, self._gimbal, self.config.water_density)

@@ -1,0 +1,247 @@
+"""The ``ledsim`` argument parser, built from the registries (scenarios, estimators,
+presets, disturbances), so ``ledsim COMMAND --help`` lists every choice with its default."""
+
+from __future__ import annotations
+
+import argparse
+import math
+
+from ..config import PAPER_DISTANCE
+from .options import (
+    DISTANCE,
+    DPHI_DEG,
+    NOISE_SCALE,
+    PARTICLES,
+    SECONDS,
+    SEED,
+    SEEDS,
+    TORQUE_LIMIT,
+    WORKERS,
+    number,
+)
+
+EXIT_USAGE = 2
+CAMERAS = ("side", "overview", "chase")  # the shipped scene's cameras
+
+
+class _Parser(argparse.ArgumentParser):
+    def error(self, message):  # one line, no usage dump
+        self.exit(EXIT_USAGE, f"{self.prog}: error: {message}\n")
+
+
+class _Help(argparse.ArgumentDefaultsHelpFormatter):
+    """Shows defaults, except where there is none to show."""
+
+    def _get_help_string(self, action):
+        text = action.help or ""
+        if action.default in (None, False, argparse.SUPPRESS) or action.required:
+            return text
+        return f"{text} (default: %(default)s)".strip()
+
+
+def _choices(registry) -> dict:
+    return dict(choices=list(registry), metavar="{" + ",".join(registry) + "}")
+
+
+def _add_world_args(p, distance_help="link distance d [m]") -> None:
+    p.add_argument("--distance", type=DISTANCE, default=PAPER_DISTANCE, help=distance_help)
+    _add_scene_args(p)
+
+
+def _add_scene_args(p) -> None:
+    from ..physics.scene import INTEGRATORS
+
+    p.add_argument("--scene", help="MJCF scene file (default: the shipped led_link.xml)")
+    from ..loop.config import WorldPart
+
+    p.add_argument("--integrator", default=WorldPart.integrator, **_choices(INTEGRATORS),
+                   help="MuJoCo integrator (docs/physics.md compares them)")
+
+
+def _add_loop_args(p) -> None:
+    from ..loop.config import LOOP_ESTIMATORS, PHYSICS_SCENARIOS, EstimatorPart, TaskPart
+    from ..physics.disturbances import DISTURBANCES
+
+    p.add_argument("--scenario", default=TaskPart.scenario, **_choices(PHYSICS_SCENARIOS),
+                   help="closed-loop scenario")
+    p.add_argument("--estimator", default=EstimatorPart.estimator,
+                   **_choices(LOOP_ESTIMATORS),
+                   help="estimator in the loop (oracle: handed the true state)")
+    p.add_argument("--disturbance", action="append", default=[], metavar="SPEC",
+                   help="name[:key=value,...] with name in " + ", ".join(DISTURBANCES)
+                   + " (repeatable)")
+    p.add_argument("--no-supervision", action="store_true",
+                   help="no loss detection, gain tracking or reacquisition scan: the "
+                   "estimator alone drives the motor (and the KKL is the shipped one of "
+                   "--distance)")
+    _add_world_args(p)
+
+
+def build_parser() -> argparse.ArgumentParser:
+    from .. import __version__
+    from ..paper.scenarios import PAPER_SCENARIOS
+    from ..physics.simulation import TORQUE_PROFILES
+    from ..presets import PRESETS
+
+    p = _Parser(prog="ledsim", description="An underwater LED optical link in MuJoCo, kept "
+                "aligned by a learned KKL observer. User mistakes exit with code 2.")
+    from ..loop.config import EstimatorPart as E
+    from ..loop.config import ExecutionPart as X
+    from ..loop.config import TaskPart as T
+    from ..loop.config import WorldPart as W
+
+    p.add_argument("--version", action="version", version=f"ledsim {__version__}")
+    sub = p.add_subparsers(dest="command", required=True, parser_class=_Parser)
+
+    common = argparse.ArgumentParser(add_help=False)
+    common.add_argument("-q", "--quiet", action="store_true",
+                        help="no progress bars or diagnostics; results and errors only")
+
+    def command(name, help):
+        return sub.add_parser(name, help=help, description=help, formatter_class=_Help,
+                              parents=[common])
+
+    ev = command("evaluate", "paper Table 1/2 experiment: KKL vs EKF/UKF/PF")
+    ev.add_argument("--scenario", required=True, **_choices(PAPER_SCENARIOS))
+    ev.add_argument("--distance", type=DISTANCE, default=PAPER_DISTANCE,
+                    help="link distance d [m]")
+    ev.add_argument("--dphi-deg", "--dphi", dest="dphi", type=DPHI_DEG, default=6.0,
+                    help="angle between the photodiode normals [deg]")
+    ev.add_argument("--seeds", type=number(0, 10_000, integer=True), default=10,
+                    help="noise seeds (>= 1)")
+    ev.add_argument("--starts", type=number(0, 10_000, integer=True), default=100,
+                    help="random initial guesses for the convergence share (0 to skip)")
+    ev.add_argument("--particles", type=number(0, 1_000_000, integer=True), default=5000,
+                    help="particle-filter size")
+    ev.add_argument("--checkpoint", help="KKL checkpoint (default: the shipped one for d)")
+    ev.add_argument("--workers", type=WORKERS, default=X.workers, help="processes")
+    ev.add_argument("--out", required=True, help="output folder")
+
+    tr = command("train", "learn a KKL observer (Algorithm 1) and save it")
+    tr.add_argument("--world", default="closed-form", **_choices(("closed-form", "mujoco")),
+                    help="whose transitions: the paper's model, or the MuJoCo world itself")
+    tr.add_argument("--design", default=None, **_choices(PRESETS),
+                    help="observer preset (default: default; in MuJoCo the bank's preset "
+                         "for --noise-scale)")
+    tr.add_argument("--distance", type=DISTANCE, default=PAPER_DISTANCE,
+                    help="link distance d [m]")
+    tr.add_argument("--noise-scale", type=NOISE_SCALE, default=1.0,
+                    help="measurement noise over the nominal (MuJoCo world)")
+    tr.add_argument("--threads", type=WORKERS, default=1,
+                    help="threads stepping the MuJoCo transitions' physics")
+    tr.add_argument("--samples", type=number(1000, 1_000_000, integer=True), default=200_000,
+                    help="training transitions")
+    tr.add_argument("--seed", type=SEED, default=0, help="seed of data and features")
+    tr.add_argument("--out", required=True, help="checkpoint path (.pt)")
+
+    sim = command("simulate", "run the MuJoCo world headless; save series + plot")
+    sim.add_argument("--seconds", type=SECONDS, default=5.0, help="duration [s]")
+    sim.add_argument("--torque-profile", default="zero", **_choices(TORQUE_PROFILES),
+                     help="gimbal torque")
+    sim.add_argument("--torque-amplitude", type=number(-10.0, 10.0, "N m"), default=0.002,
+                     help="[N m]")
+    sim.add_argument("--torque-frequency", type=number(0.0, 50.0, "Hz", lo_open=True),
+                     default=0.5, help="[Hz]")
+    from ..physics.disturbances import DISTURBANCES
+
+    sim.add_argument("--disturbance", action="append", default=[], metavar="SPEC",
+                     help="name[:key=value,...] with name in " + ", ".join(DISTURBANCES)
+                     + " (repeatable)")
+    _add_world_args(sim)
+    sim.add_argument("--dphi-deg", "--dphi", dest="dphi", type=DPHI_DEG, default=6.0,
+                     help="angle between the photodiode normals [deg]")
+    sim.add_argument("--led-yaw-deg", "--led-yaw", dest="led_yaw",
+                     type=number(-180.0, 180.0, "deg"), default=0.0,
+                     help="LED axis turned away from the receiver [deg]")
+    sim.add_argument("--led-offset", type=number(-1.0, 1.0, "m"), default=0.0,
+                     help="LED moved across the link [m]")
+    sim.add_argument("--torque-limit", type=TORQUE_LIMIT, default=W.torque_limit,
+                     help="[N m]")
+    sim.add_argument("--gimbal-angle", type=number(-math.pi, math.pi, "rad"), default=0.0,
+                     help="initial angle [rad]")
+    sim.add_argument("--seed", type=SEED, default=0, help="measurement-noise seed")
+    sim.add_argument("--out", required=True, help="output folder")
+
+    rn = command("run", "closed loop in MuJoCo: estimator + controller + gimbal")
+    _add_loop_args(rn)
+    rn.add_argument("--torque-limit", type=TORQUE_LIMIT, default=W.torque_limit,
+                    help="[N m]")
+    rn.add_argument("--noise-scale", type=NOISE_SCALE, default=W.noise_scale,
+                    help="multiplies the measurement-noise std")
+    rn.add_argument("--seconds", type=SECONDS, default=None,
+                    help="length of each run [s] (default: the scenario's, 10 s)")
+    rn.add_argument("--seeds", type=SEEDS, default=X.seeds,
+                    help="Monte-Carlo runs (seeds 0..N-1)")
+    rn.add_argument("--particles", type=PARTICLES, default=E.particles,
+                    help="particle-filter size")
+    rn.add_argument("--checkpoint", help="KKL checkpoint trained on the MuJoCo world")
+    rn.add_argument("--omega-model", default=E.omega_model,
+                    **_choices(("identified", "simulator", "none")),
+                    help="f used by the KKL's Omega correction")
+    rn.add_argument("--workers", type=WORKERS, default=X.workers, help="processes")
+    rn.add_argument("--no-plot", action="store_true", help="skip run.png")
+    rn.add_argument("--save-trace", action="store_true",
+                    help="also write trace_seed<K>.npz per seed: t, phi, phidot, phi_hat, "
+                         "phidot_hat, p1, p2, torque, lost (SI units, one row per step)")
+    rn.add_argument("--out", required=True, help="output folder")
+
+    rd = command("render", "render a closed-loop run to an H.264 mp4 (headless)")
+    _add_loop_args(rd)
+    rd.add_argument("--seconds", type=number(0.0, 600.0, "s", lo_open=True), default=6.0,
+                    help="[s]")
+    rd.add_argument("--width", type=number(-10_000, 10_000, integer=True), default=640,
+                    help="[px]")
+    rd.add_argument("--height", type=number(-10_000, 10_000, integer=True), default=480,
+                    help="[px]")
+    rd.add_argument("--fps", type=number(-1e6, 240.0), default=30.0,
+                    help="frames per second, at most 240")
+    rd.add_argument("--camera", default="side",
+                    help="a camera of the scene; the shipped one has " + ", ".join(CAMERAS))
+    rd.add_argument("--gl", default=None, choices=["osmesa", "egl"],
+                    help="OpenGL backend (default: MUJOCO_GL, else osmesa)")
+    rd.add_argument("--seed", type=SEED, default=0, help="noise and disturbance seed")
+    rd.add_argument("--out", required=True, help="video file (.mp4)")
+
+    sw = command("sweep", "a grid of closed-loop runs (estimators x disturbances x "
+                 "distances x noise scales x seeds), locally or on a Ray cluster")
+    from ..loop.config import LOOP_ESTIMATORS, PHYSICS_SCENARIOS
+    from ..loop.sweep import BACKENDS
+    sw.add_argument("--estimator", action="append", choices=list(LOOP_ESTIMATORS),
+                    metavar="{" + ",".join(LOOP_ESTIMATORS) + "}",
+                    help="estimator (repeatable; default: kkl)")
+    sw.add_argument("--disturbance", action="append", metavar="SPEC",
+                    help="disturbance of one cell: none, name[:key=value,...], or several "
+                    "joined by + (repeatable; default: none)")
+    sw.add_argument("--distance", action="append", type=DISTANCE,
+                    help="link distance d [m] (repeatable; default: 0.085)")
+    sw.add_argument("--noise-scale", action="append", type=NOISE_SCALE,
+                    help="multiplies the measurement-noise std (repeatable; default: 1)")
+    sw.add_argument("--seeds", type=SEEDS, default=2, help="runs per combination")
+    sw.add_argument("--scenario", default=T.scenario, **_choices(PHYSICS_SCENARIOS),
+                    help="closed-loop scenario")
+    sw.add_argument("--seconds", type=SECONDS, default=None,
+                    help="length of each run [s] (default: the scenario's, 10 s)")
+    sw.add_argument("--particles", type=PARTICLES, default=E.particles,
+                    help="particle-filter size")
+    sw.add_argument("--torque-limit", type=TORQUE_LIMIT, default=W.torque_limit,
+                    help="[N m]")
+    sw.add_argument("--no-supervision", action="store_true",
+                    help="no loss detection or reacquisition (see ledsim run)")
+    _add_scene_args(sw)
+    sw.add_argument("--backend", default="local", **_choices(BACKENDS),
+                    help="local processes, or Ray (pip install 'ledsim[ray]')")
+    sw.add_argument("--address", default=None,
+                    help="Ray cluster to join (e.g. auto, or ray://HEAD:10001); default: "
+                    "start a local Ray instance of --workers CPUs")
+    sw.add_argument("--workers", type=WORKERS, default=X.workers,
+                    help="processes (local) or CPUs of a local Ray instance")
+    sw.add_argument("--no-plot", action="store_true", help="skip summary.png")
+    sw.add_argument("--out", required=True, help="output folder; rerun to resume")
+
+    dm = command("demo", "main job: closed-loop alignment with every estimator")
+    dm.add_argument("--seeds", type=number(1, 1000, integer=True), default=2,
+                    help="Monte-Carlo runs per estimator")
+    dm.add_argument("--out", default="out/demo", help="output folder")
+    dm.add_argument("--scene", help="MJCF scene file (default: the shipped led_link.xml)")
+    dm.add_argument("--no-video", action="store_true", help="skip the rendered video")
+    return p
