@@ -15,6 +15,7 @@ oracle      handed the true state (MuJoCo loop only): the best any estimator can
 
 from __future__ import annotations
 
+import math
 from pathlib import Path
 
 from observer import checkpoint as ckpt
@@ -43,7 +44,7 @@ HANDOVER_S = 3.0
 
 def build_estimator(name: str, system: DiscreteSystem, *, model: DiscreteSystem | None = None,
                     checkpoint: str | Path | None = None, particles: int = 2000,
-                    use_omega: bool = True,
+                    use_omega: bool = True, redraw: bool = True,
                     slow_checkpoint: str | Path | None = None) -> Estimator | None:
     """The estimator called ``name``; None for the oracle.
 
@@ -57,6 +58,8 @@ def build_estimator(name: str, system: DiscreteSystem, *, model: DiscreteSystem 
         particles: particle-filter size (its random numbers follow the run's seed:
             ``Estimator.seed_run``).
         use_omega: apply the KKL's Omega correction.
+        redraw: the particle filter re-draws part of its particles when every one of them
+            is implausible (off: a supervisor handles losses).
         slow_checkpoint: the slow half of ``kkl-handover`` (``checkpoint`` is its fast
             half).
     """
@@ -81,7 +84,7 @@ def build_estimator(name: str, system: DiscreteSystem, *, model: DiscreteSystem 
     if name == "ukf":
         return UnscentedKalmanFilter(model)
     if name == "pf":
-        return ParticleFilter(model, particles)
+        return ParticleFilter(model, particles, **({} if redraw else {"lost_chi2": math.inf}))
     if name == "oracle":
         return None
     raise LedsimError(f"unknown estimator {name!r}: choose one of {', '.join(ESTIMATORS)}")

@@ -59,6 +59,10 @@ class ObserverBank(Estimator):
         x = math.log(max(noise_ratio, 1e-12))
         return min(range(len(logs)), key=lambda i: abs(logs[i] - x))
 
+    def start_with(self, noise_ratio: float) -> None:
+        """Before a run: the member for ``noise_ratio`` is active (no hysteresis)."""
+        self.active = self.nearest(noise_ratio)
+
     def select(self, noise_ratio: float, y: np.ndarray | None = None) -> bool:
         """Switch to the member for ``noise_ratio`` once it is clearly nearer (beyond the
         hysteresis); the new member starts from the current estimate and takes ``y``.

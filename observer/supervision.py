@@ -39,11 +39,12 @@ class ResidualMonitor:
         noise_tau: time constant of the online noise-level estimate [s].
         model_error: relative error of ``h`` itself (a bias the average does not remove:
             the hull's motion changes the transmitter gain h assumes) [-].
+        noise_ratio: the initial noise level over the system's nominal one [-].
     """
 
     def __init__(self, system: DiscreteSystem, tau: float = 0.1, threshold: float = 25.0,
                  domain_margin: float = 0.2, noise_tau: float = 1.0,
-                 model_error: float = 0.1):
+                 model_error: float = 0.1, noise_ratio: float = 1.0):
         self.system = system
         self.alpha = min(1.0, system.Te / tau)
         self.noise_alpha = min(1.0, system.Te / noise_tau)
@@ -55,6 +56,7 @@ class ResidualMonitor:
         self._low, self._high = self.low.tolist(), self.high.tolist()
         self.sigma0 = np.asarray(system.measurement_noise_std, dtype=float)
         self._noise_floor = (0.25 * self.sigma0**2).tolist()
+        self.noise_ratio = noise_ratio
         self.reset()
 
     def reset(self) -> None:
@@ -64,7 +66,7 @@ class ResidualMonitor:
         self.lost = False
         self.reason = ""
         if not hasattr(self, "_noise_var"):
-            self.noise_var = self.sigma0**2
+            self.noise_var = self.sigma0**2 * self.noise_ratio**2
             self._y_prev = None
 
     @property

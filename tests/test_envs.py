@@ -129,3 +129,14 @@ def test_a_bad_action_is_refused_in_one_line(action):
     env.reset(seed=0)
     with pytest.raises(ValueError, match="one finite number"):
         env.step(action)
+
+
+def test_the_env_pickles_as_its_arguments():
+    import pickle
+
+    env = gym.make(ENV_ID, scenario="align", disturbances="vibration:frequency=3").unwrapped
+    copy = pickle.loads(pickle.dumps(env))
+    assert copy.cfg == env.cfg and copy.cfg.disturbances == ("vibration:frequency=3",)
+    a, _ = env.reset(seed=3)
+    b, _ = copy.reset(seed=3)
+    np.testing.assert_array_equal(a, b)

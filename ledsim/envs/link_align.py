@@ -39,6 +39,7 @@ from dataclasses import replace
 import gymnasium as gym
 import numpy as np
 from gymnasium import spaces
+from gymnasium.utils import EzPickle
 
 from ..config import LinkConstants
 from ..loop.closed_loop import control_step, identified_model, run_supervisor, start_world
@@ -51,7 +52,7 @@ from ..physics.tick import advance
 from ..step import GimbalMotor
 
 
-class LinkAlignEnv(gym.Env):
+class LinkAlignEnv(gym.Env, EzPickle):
     """Keep the receiver aligned on the LED beam (see the module docstring).
 
     Args:
@@ -80,6 +81,11 @@ class LinkAlignEnv(gym.Env):
                  phi0_range: float = 0.3, render_mode: str | None = None, width: int = 640,
                  height: int = 480, camera: str = "side",
                  integrator: str = WorldPart.integrator, scene: str | None = None):
+        # Pickles as its constructor arguments (MuJoCo's model does not pickle), as
+        # Gymnasium's MuJoCo environments do: the copy is a new environment.
+        EzPickle.__init__(self, scenario, distance, noise_scale, disturbances, torque_limit,
+                          frame_skip, phi0_range, render_mode, width, height, camera,
+                          integrator, scene)
         if render_mode not in (None, "rgb_array"):
             raise ValueError(f"render_mode={render_mode!r}: use None or 'rgb_array'")
         if int(frame_skip) < 1:

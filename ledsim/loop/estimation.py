@@ -11,13 +11,11 @@ rescaled powers carry. One configuration thus serves every distance.
 from __future__ import annotations
 
 import json
-import math
 from dataclasses import dataclass, replace
 from pathlib import Path
 
 from observer import checkpoint as ckpt
 from observer.bank import ObserverBank
-from observer.baselines import ParticleFilter
 
 from ..config import PAPER_DISTANCE
 from ..estimators import build_estimator
@@ -108,11 +106,10 @@ def loop_estimator(cfg: RunConfig, system: GimbalSystem, model: IdentifiedGimbal
     """(estimator, the system whose gain its model has) for a run in ``system``'s world;
     the estimator is None for the oracle."""
     if cfg.estimator != "kkl":
-        est = build_estimator(cfg.estimator, system, model=model, particles=cfg.particles)
-        if cfg.supervision and isinstance(est, ParticleFilter):
-            # Under supervision a loss is the supervisor's to handle, for every estimator
-            # alike: the filter's own re-draw fired on half-occluded samples and kicks.
-            est.lost_chi2 = math.inf
+        # Under supervision a loss is the supervisor's to handle, for every estimator
+        # alike: the particle filter's own re-draw fired on half-occluded samples and kicks.
+        est = build_estimator(cfg.estimator, system, model=model, particles=cfg.particles,
+                              redraw=not cfg.supervision)
         return est, system
     members = kkl_members(cfg)
     first = members[0].world

@@ -56,11 +56,10 @@ class LinkSupervisor:
                  noise_ratio: float = 1.0):
         self.estimator = estimator
         model = estimator.system
-        self.monitor = ResidualMonitor(model)
-        self.monitor.noise_var = self.monitor.noise_var * noise_ratio**2
+        self.monitor = ResidualMonitor(model, noise_ratio=noise_ratio)
         self.sensor_noise = noise_ratio * gain_ratio  # in the model's nominal noise
         if isinstance(estimator, ObserverBank):
-            estimator.active = estimator.nearest(noise_ratio)
+            estimator.start_with(noise_ratio)
         self.gain = GainTracker(model, lambda y: pair_shape_inverse(y, constants),
                                 model_gain(model, constants), ratio=gain_ratio)
         self.scan = AcquisitionScan(constants, inertia)
