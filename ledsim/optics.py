@@ -157,3 +157,15 @@ def _response_and_slope(phi: float, r: ReceiverResponse) -> tuple[float, float]:
 @functools.lru_cache(maxsize=8)
 def _shape_table(r: ReceiverResponse, dphi: float) -> np.ndarray:
     return np.log(receiver_response(_SHAPE_PHI, r) / receiver_response(_SHAPE_PHI + dphi, r))
+
+
+def step_form(coef_phi, coef_rate, gain: float, c: LinkConstants, output_low, output_high):
+    """The :class:`observer.export.StepForm` of a system whose h is
+    ``gain x [g(phi), g(phi + dphi)]`` [W] (what an exported observer computes)."""
+    from observer.export import StepForm
+
+    r = c.receiver
+    return StepForm(tuple(float(v) for v in coef_phi), tuple(float(v) for v in coef_rate),
+                    float(gain), (r.a1, r.b1, r.c1, r.a2, r.b2, r.c2), float(c.dphi),
+                    tuple(float(v) for v in output_low), tuple(float(v) for v in output_high))
+

@@ -78,6 +78,18 @@ def save(obs: KKLObserver, path: str | Path, extra: dict | None = None,
     return path
 
 
+def metadata(path: str | Path) -> dict:
+    """The metadata a checkpoint was saved with (its system, design, training)."""
+    path = Path(path)
+    if not path.is_file():
+        raise CheckpointError(f"checkpoint {str(path)!r} does not exist")
+    try:
+        return json.loads(_read(path)["metadata_json"])
+    except Exception as exc:
+        raise CheckpointError(f"checkpoint {str(path)!r} is corrupt or not a ledsim "
+                              f"checkpoint ({type(exc).__name__})") from None
+
+
 def load(path: str | Path, system: DiscreteSystem, check: bool = True) -> KKLObserver:
     """Load a checkpoint for ``system``; raise :class:`CheckpointError` if it does not fit."""
     path = Path(path)

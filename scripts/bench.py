@@ -245,6 +245,46 @@ def short_run(plot: bool, seconds: float = 10.0) -> dict:
             "simulating_share": sim / wall, "imports_torch": torch_imported}
 
 
+def onnx_step_speed(steps: int = 2000) -> dict:
+    """The exported KKL step (the shipped MuJoCo observer, with Omega) under onnxruntime
+    against the numpy observer's update + predict, one thread each: us per step, and
+    the file's size."""
+    import onnxruntime as ort
+
+    from ledsim.estimators import build_estimator
+    from ledsim.loop.estimation import identified_model
+    from ledsim.physics.scene import WorldConfig
+    from ledsim.physics.system import GimbalSystem
+    from ledsim.resources import require_shipped_checkpoint
+    from observer.export import kkl_step_graph
+
+    system = GimbalSystem(WorldConfig())
+    model = identified_model(system)
+    kkl = build_estimator("kkl", system, model=model,
+                          checkpoint=require_shipped_checkpoint(0.085, "mujoco"))
+    data = kkl_step_graph(kkl, model.step_form()).SerializeToString()
+    opts = ort.SessionOptions()
+    opts.intra_op_num_threads = opts.inter_op_num_threads = 1
+    sess = ort.InferenceSession(data, opts, providers=["CPUExecutionProvider"])
+    ys = model.h(np.stack([np.linspace(-0.2, 0.2, steps), np.zeros(steps)], -1))
+    out = {}
+    for name, u in (("without input", 0.0), ("with input (Omega)", 5.0)):
+        kkl.reset()
+        t0 = time.perf_counter()
+        for y in ys:
+            kkl.update(y)
+            kkl.predict(u)
+        t_np = (time.perf_counter() - t0) / steps
+        z, uu = kkl.z.copy(), np.array([u])
+        t0 = time.perf_counter()
+        for y in ys:
+            _, z = sess.run(None, {"z": z, "y": y, "u": uu})
+        out[name] = {"numpy_us": 1e6 * t_np,
+                     "onnxruntime_us": 1e6 * (time.perf_counter() - t0) / steps}
+    out["file_bytes"] = len(data)
+    return out
+
+
 def import_floor() -> float:
     """Wall time [s] of a fresh Python that only imports numpy and mujoco."""
     import subprocess
@@ -402,6 +442,16 @@ def main() -> None:
               "without torch (`observer/tensorfile.py`). A fresh Python that only imports "
               f"numpy and MuJoCo takes {floor_import:.2f} s: longer than the 10 s run "
               "simulates, so only longer runs can spend most of their time simulating."]
+    ox = onnx_step_speed()
+    lines += ["", "## The exported observer (`ledsim export`, one step, one thread)", "",
+              "The shipped MuJoCo KKL as an ONNX graph (float64) under onnxruntime, against "
+              "the numpy observer's update + predict on the same powers. File size: "
+              f"{ox['file_bytes'] / 1024:.0f} KiB.", "",
+              "| step | numpy us | onnxruntime us | onnxruntime / numpy |", "|---|---|---|---|"]
+    for key in ("without input", "with input (Omega)"):
+        r = ox[key]
+        lines.append(f"| {key} | {r['numpy_us']:.1f} | {r['onnxruntime_us']:.1f} "
+                     f"| {r['onnxruntime_us'] / r['numpy_us']:.2f} |")
     full, bare = render_speed()
     lines += ["", f"## Rendering ({os.environ.get('MUJOCO_GL', 'default')} backend, "
               "640x480, side camera)", "", "| what | frames / s |", "|---|---|",
@@ -433,7 +483,7 @@ def main() -> None:
                         for (e, s, t), (b, r) in batch_rows.items()],
             "render_fps": full, "render_fps_bare": bare,
             "transitions_us": trans, "transitions_speedup": ref / trans["batched, 2 threads"],
-            "short_run": runs, "import_numpy_mujoco_s": floor_import,
+            "short_run": runs, "import_numpy_mujoco_s": floor_import, "onnx_step": ox,
             "threads": {"blas": os.environ["OPENBLAS_NUM_THREADS"], "torch": 1}}
         atomic_write_text(Path(args.json), json.dumps(figures, indent=2) + "\n")
 

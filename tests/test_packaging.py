@@ -47,3 +47,13 @@ def test_installed_wheel_runs_from_another_folder(wheel, tmp_path):
     r = subprocess.run([sys.executable, "-c", "import ledsim; print(ledsim.__file__)"],
                        cwd=work, env=env, capture_output=True, text=True)
     assert r.stdout.startswith(str(target))
+
+
+def test_torch_is_the_train_extra_not_a_requirement(wheel):
+    meta = next(n for n in zipfile.ZipFile(wheel).namelist() if n.endswith("METADATA"))
+    lines = zipfile.ZipFile(wheel).read(meta).decode().splitlines()
+    requires = [ln for ln in lines if ln.startswith("Requires-Dist:")]
+    core = [ln for ln in requires if "extra ==" not in ln]
+    assert not any("torch" in ln for ln in core), core
+    assert any("torch" in ln and 'extra == "train"' in ln for ln in requires)
+    assert any("onnxruntime" in ln and 'extra == "onnx"' in ln for ln in requires)

@@ -134,6 +134,12 @@ def build_parser() -> argparse.ArgumentParser:
     tr.add_argument("--seed", type=SEED, default=0, help="seed of data and features")
     tr.add_argument("--out", required=True, help="checkpoint path (.pt)")
 
+    ex = command("export", "one step of a KKL observer as an ONNX graph (for the vehicle)")
+    ex.add_argument("--checkpoint", help="KKL checkpoint (default: the shipped MuJoCo "
+                    "observer of d = 0.085 m)")
+    ex.add_argument("--format", default="onnx", **_choices(("onnx",)), help="file format")
+    ex.add_argument("--out", required=True, help="output file (.onnx)")
+
     sim = command("simulate", "run the MuJoCo world headless; save series + plot")
     sim.add_argument("--seconds", type=SECONDS, default=5.0, help="duration [s]")
     sim.add_argument("--torque-profile", default="zero", **_choices(TORQUE_PROFILES),

@@ -16,7 +16,13 @@ import numpy as np
 from observer.system import DiscreteSystem
 
 from ..config import LinkConstants
-from ..optics import pair_power, pair_power_jacobian, plausible_power_range, transmitter_gain
+from ..optics import (
+    pair_power,
+    pair_power_jacobian,
+    plausible_power_range,
+    step_form,
+    transmitter_gain,
+)
 
 
 class LEDLinkModel(DiscreteSystem):
@@ -56,6 +62,11 @@ class LEDLinkModel(DiscreteSystem):
         x = np.asarray(x, dtype=float)
         u = self.input_array(u, x.shape[:-1])[..., 0]
         return np.stack([x[..., 0] + self.Te * x[..., 1], x[..., 1] + self.Te * u], axis=-1)
+
+    def step_form(self):
+        """f and h for an exported observer (:class:`observer.export.StepForm`)."""
+        return step_form((self.Te, 0.0, 0.0), (1.0, self.Te, 0.0), self.cp_bar,
+                         self.constants, self.output_low, self.output_high)
 
     def f_inverse(self, x, u=0.0):
         """x_k from x_{k+1} (the model is time-reversible, paper Assumption 1)."""

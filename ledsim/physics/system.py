@@ -36,6 +36,7 @@ from ..optics import (
     pair_power_jacobian,
     plausible_power_range,
     receiver_response_at,
+    step_form,
 )
 from .sensor import IrradianceSensor
 from .world import LinkWorld, WorldConfig
@@ -206,6 +207,11 @@ class IdentifiedGimbalModel(DiscreteSystem):
             return np.array([k * receiver_response_at(phi, c.receiver),
                              k * receiver_response_at(phi + c.dphi, c.receiver)])
         return pair_power(self.power_gain, np.asarray(x, dtype=float)[..., 0], self.constants)
+
+    def step_form(self):
+        """f and h for an exported observer (:class:`observer.export.StepForm`)."""
+        return step_form(self.coef_phi, self.coef_rate, self.power_gain, self.constants,
+                         self.output_low, self.output_high)
 
     def f_jacobian(self, x, u=0.0, eps=None):
         x = np.asarray(x, dtype=float)
