@@ -127,9 +127,12 @@ def test_run_seconds_sets_the_length_of_a_run(tmp_path):
                  "--no-plot", "--out", str(out)]) == 0
     res = json.loads((out / "results.json").read_text())
     assert res["seconds"] == 2.5 and not (out / "run.png").exists()
-    # The steady-state window (from 5 s) is empty: undefined, not NaN.
-    assert res["rmse_steady_x1"] == {"mean": None, "std": None, "n": 0}
+    # Shorter than the steady-state window (from 5 s): its second half stands in for it,
+    # rather than an empty column; the oracle's error there is zero.
+    assert res["rmse_steady_x1"] == {"mean": 0.0, "std": 0.0, "n": 1}
     assert res["rmse_x1"]["n"] == 1
+    # What is undefined stays undefined (null), not NaN: no event, no recovery.
+    assert res["recovery_time"] == {"mean": None, "std": None, "n": 0}
 
 
 def test_version_and_help_list_choices_and_defaults(capsys):

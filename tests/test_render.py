@@ -117,11 +117,18 @@ def test_missing_gl_library_names_the_fix(monkeypatch):
     assert "\n" not in str(info.value)
 
 
-def test_overlay_axes_follow_the_data():
-    from ledsim.physics.render import follow
+def test_overlay_axes_stay_put_and_show_five_seconds():
+    from ledsim.physics.overlay import Overlay, axis_limits
 
-    assert follow((), (-0.5, 0.5), 0.05) == (-0.5, 0.5)
-    lo, hi = follow(([0.01, 0.02], [0.015, float("nan")]), (-0.5, 0.5), 0.05)
-    assert lo < 0.01 and hi > 0.02 and hi - lo == pytest.approx(0.05)  # the floor applies
-    lo, hi = follow(([-1.0, 2.0],), (-0.5, 0.5), 0.05)
-    assert lo < -1.0 and hi > 2.0 and hi - lo < 3.5
+    assert axis_limits([], (-0.5, 0.5), 0.5) == (-0.5, 0.5)
+    # A 0.03 rad wobble keeps the fixed scale (it used to fill the panel) ...
+    assert axis_limits([0.01, 0.04, float("nan")], (-0.5, 0.5), 0.5) == (-0.5, 0.5)
+    # ... and the scale widens in whole steps only when the data leaves it.
+    assert axis_limits([-1.2, 0.7], (-0.5, 0.5), 0.5) == (-1.5, 1.0)
+    # One sample per control step of 10 ms: five seconds of history, not 1.5.
+    o = Overlay(320, 240, seconds_shown=5.0, sample_period=0.01)
+    for _ in range(1000):
+        o.push(0.0, 0.0, 1.0, 0.9)
+    assert len(o.phi) == 501
+    frame = o.draw(np.zeros((240, 320, 3), np.uint8), 10.0, 1.0)
+    assert frame.shape == (240, 320, 3) and frame[-80:].std() > 5

@@ -81,6 +81,10 @@ def run(args) -> int:
 
     cfg = _loop_config(args)
     out = check_out_dir(args.out)
+    if cfg.steady_from < cfg.scenario_spec.steady_from:
+        log.info(f"a {cfg.run_seconds:g} s run is shorter than the steady-state window "
+                 f"(from {cfg.scenario_spec.steady_from:g} s): RMSE over its second half, "
+                 f"from {cfg.steady_from:g} s")
     summary, outs = run_seeds(cfg, progress=not args.quiet, all_traces=args.save_trace)
     with output_folder(out) as tmp:
         written = write_run(summary, outs[0].trace, tmp, plot=not args.no_plot)

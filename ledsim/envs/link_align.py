@@ -169,9 +169,9 @@ class LinkAlignEnv(gym.Env, EzPickle):
 
             w, h, cam = self._render_args
             self._recorder = FrameRecorder(self.world, w, h, self.metadata["render_fps"], cam,
-                                           label="LinkAlign-v0")
+                                           label="LinkAlign-v0", estimate=False)
         r = self.reading
-        self._recorder.overlay.push(r.phi, r.phi, r.power[0], r.power[1])
+        self._recorder.overlay.push(r.phi, np.nan, r.power[0], r.power[1])
         return self._recorder.render(self.k * self.dt, r)
 
     def close(self):

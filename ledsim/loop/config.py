@@ -195,6 +195,14 @@ class RunConfig:
         return PHYSICS_SCENARIOS[self.scenario]
 
     @property
+    def steady_from(self) -> float:
+        """Start of the steady-state window [s]: the scenario's, or the second half of a
+        run too short for it (so its RMSE is not empty)."""
+        spec = self.scenario_spec
+        return spec.steady_from if self.run_seconds > spec.steady_from else \
+            0.5 * self.run_seconds
+
+    @property
     def run_seconds(self) -> float:
         return self.scenario_spec.seconds if self.seconds is None else self.seconds
 

@@ -71,7 +71,7 @@ def outcome(res, xhat: np.ndarray, flags: np.ndarray, cfg: RunConfig, constants,
     (lost, acquiring) flags per step, and the seconds spent controlling and in all."""
     events = [d for d in disturbances if d.event_end is not None]
     flags = flags.reshape(-1, 2)
-    metrics = run_metrics(res.x, xhat, res.power_clean, cfg.scenario_spec.steady_from,
+    metrics = run_metrics(res.x, xhat, res.power_clean, cfg.steady_from,
                           constants, events[0].event_end if events else None,
                           lost=flags[:, 0] if supervised else None,
                           event_start=events[0].start if events else None,

@@ -14,16 +14,15 @@ from __future__ import annotations
 
 import os
 import tempfile
-from collections import deque
 from pathlib import Path
 
 import mujoco
 import numpy as np
-from PIL import Image, ImageDraw, ImageFont
 
 from ..errors import LedsimError
 from ..optics import peak_power
 from ..outputs import INTERRUPTED, umask
+from .overlay import STATUS_BADGES, Overlay  # noqa: F401 (re-exported)
 from .sensor import SensorReading
 from .world import LinkWorld
 
@@ -107,85 +106,6 @@ def blocking_points(world: LinkWorld) -> list[np.ndarray | None]:
     return points
 
 
-def follow(series, default: tuple[float, float], floor: float) -> tuple[float, float]:
-    """Axis limits that follow the data shown (finite values, 10% margin), never narrower
-    than ``floor``; ``default`` until there is data."""
-    values = np.concatenate([np.asarray(v, dtype=float) for v in series]) if series else []
-    values = values[np.isfinite(values)] if len(values) else values
-    if len(values) == 0:
-        return default
-    lo, hi = float(values.min()), float(values.max())
-    mid, half = 0.5 * (lo + hi), max(0.55 * (hi - lo), 0.5 * floor)
-    return mid - half, mid + half
-
-
-class Overlay:
-    """Panel with the time and scrolling traces of phi (true, estimated) and P1, P2."""
-
-    def __init__(self, width: int, height: int, seconds_shown: float = 5.0, fps: float = 30,
-                 label: str = ""):
-        self.w, self.h = width, height
-        self.panel_h = max(90, int(0.3 * height))
-        self.n = max(2, int(seconds_shown * fps))
-        self.phi, self.phihat, self.p1, self.p2 = (deque(maxlen=self.n) for _ in range(4))
-        self.label = label
-        size = self.font_px = max(10, height // 40)
-        try:
-            self.font = ImageFont.load_default(size=size)
-        except TypeError:  # Pillow < 10.1 has only the fixed bitmap font
-            self.font = ImageFont.load_default()
-
-    status = ""
-
-    def push(self, phi: float, phihat: float, p1: float, p2: float) -> None:
-        for q, v in ((self.phi, phi), (self.phihat, phihat), (self.p1, p1), (self.p2, p2)):
-            q.append(v)
-
-    def draw(self, frame: np.ndarray, t: float, peak_power: float) -> np.ndarray:
-        y0 = self.h - self.panel_h
-        frame[y0:] = (frame[y0:] * 0.3).astype(np.uint8)  # darken the panel area
-        img = Image.fromarray(frame)
-        d = ImageDraw.Draw(img)
-        half = self.w // 2
-        boxes = [(8, y0 + 22, half - 8, self.h - 8), (half + 8, y0 + 22, self.w - 8, self.h - 8)]
-        for box in boxes:
-            d.rectangle(box, outline=(90, 110, 120))
-        lim_phi = follow((self.phi, self.phihat), (-0.5, 0.5), floor=0.05)
-        self._trace(d, boxes[0], self.phi, lim_phi, (255, 255, 255))
-        self._trace(d, boxes[0], self.phihat, lim_phi, (80, 200, 255))
-        lim_p = follow((self.p1, self.p2), (0.0, 1.1 * peak_power), floor=0.1 * peak_power)
-        self._trace(d, boxes[1], self.p1, lim_p, (80, 200, 255))
-        self._trace(d, boxes[1], self.p2, lim_p, (255, 170, 60))
-        d.text((8, y0 + 4), f"phi [rad] {lim_phi[0]:+.2f}..{lim_phi[1]:+.2f}: true (white) "
-               "estimate (blue)", fill=(230, 230, 230), font=self.font)
-        d.text((half + 8, y0 + 4), f"power [W] {lim_p[0]:.2f}..{lim_p[1]:.2f}: P1 (blue) "
-               "P2 (orange)", fill=(230, 230, 230), font=self.font)
-        d.text((8, 6), f"t = {t:5.2f} s   {self.label}", fill=(255, 255, 255), font=self.font)
-        if self.status in STATUS_BADGES:
-            text, colour = STATUS_BADGES[self.status]
-            x0 = self.w - 8 - d.textlength(text, font=self.font) - 12
-            d.rectangle((x0, 4, self.w - 8, 10 + self.font_px + 6), fill=colour)
-            d.text((x0 + 6, 8), text, fill=(0, 0, 0), font=self.font)
-        return np.asarray(img)
-
-    def _trace(self, d, box, values, limits, colour) -> None:
-        if len(values) < 2:
-            return
-        x0, y0, x1, y1 = box
-        lo, hi = limits
-        v = np.clip((np.asarray(values) - lo) / (hi - lo), 0.0, 1.0)
-        xs = x1 - (len(v) - 1 - np.arange(len(v))) * (x1 - x0) / (self.n - 1)
-        ys = y1 - v * (y1 - y0)
-        d.line(list(zip(xs.tolist(), ys.tolist(), strict=True)), fill=colour, width=2)
-
-
-#: Overlay badge of the link supervisor's state: text and colour.
-STATUS_BADGES = {"ok": ("LINK OK", (90, 220, 120)),
-                 "dropout": ("BEAM BLOCKED - holding", (240, 210, 70)),
-                 "lost": ("LINK LOST", (255, 170, 60)),
-                 "scanning": ("LINK LOST - scanning", (255, 90, 90))}
-
-
 class VideoWriter:
     """H.264 mp4 through imageio-ffmpeg, written to a temporary name and renamed at the
     end: an interrupted render never leaves a partial file under the final name."""
@@ -219,10 +139,12 @@ class VideoWriter:
 
 
 class FrameRecorder:
-    """Renders frames at ``fps`` during a closed-loop run (an ``on_step`` callback)."""
+    """Renders frames at ``fps`` during a closed-loop run (an ``on_step`` callback);
+    ``estimate``: the overlay draws an estimate beside the true phi."""
 
     def __init__(self, world: LinkWorld, width: int, height: int, fps: float,
-                 camera: str, writer: VideoWriter | None = None, label: str = ""):
+                 camera: str, writer: VideoWriter | None = None, label: str = "",
+                 estimate: bool = True):
         if camera not in world.camera_names():
             raise RenderError(f"--camera {camera!r} is not in the scene: choose from "
                               f"{', '.join(world.camera_names())}")
@@ -232,7 +154,8 @@ class FrameRecorder:
         self.fps = fps
         self.next_t = 0.0
         self.writer = writer
-        self.overlay = Overlay(width, height, fps=fps, label=label)
+        self.overlay = Overlay(width, height, sample_period=world.config.constants.Te,
+                               label=label, estimate=estimate)
         self.peak = peak_power(world.config.constants)
         self.last_frame: np.ndarray | None = None
         self.option = scene_option()
