@@ -202,3 +202,10 @@ def test_detection_delay_counts_a_loss_already_on_at_the_event():
     m = run_metrics(x, x, np.ones((n, 2)), 1.0, C, event_end=3.5, lost=lost,
                     event_start=3.0)
     assert m.detection_delay == pytest.approx(0.12)
+
+
+def test_converging_from_the_initial_guess_is_not_a_lost_link():
+    # The KKL's first 0.4 s used to show as a loss ([[0.06, 0.43]]) with no disturbance.
+    out = _run(estimator="kkl")
+    assert out.metrics.link_events == []
+    assert not out.trace.lost.any()

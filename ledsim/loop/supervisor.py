@@ -95,7 +95,9 @@ class LinkSupervisor:
                 if est.select(self.noise_ratio(), self.gain.normalize(y)):
                     xhat = est.xhat
             return Decision(xhat, False)
-        if t < self.warmup or not self.reacquire:
+        if t < self.warmup:  # still converging from the initial guess: not a lost link
+            return Decision(xhat, False, reason="converging")
+        if not self.reacquire:
             return Decision(xhat, True, reason=self.monitor.reason)
         # Lost: re-seed from the last samples if they show the beam (no need to move),
         # else scan until they do.

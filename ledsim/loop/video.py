@@ -46,6 +46,7 @@ def render_video(cfg: RunConfig, seed: int, out: Path, spec: VideoSpec,
         if run.supervised:
             d = run.step.decision
             status = ("scanning" if d.acquiring else "lost" if d.lost
+                      else "converging" if d.reason == "converging"
                       else "dropout" if run.step.gate.held.any() else "ok")
         recorder[0](t, run.world, run.reading, run.step.decision.xhat, status=status)
 

@@ -10,6 +10,7 @@ from PIL import Image, ImageDraw, ImageFont
 
 #: Overlay badge of the link supervisor's state: text and colour.
 STATUS_BADGES = {"ok": ("LINK OK", (90, 220, 120)),
+                 "converging": ("ACQUIRING", (150, 200, 255)),
                  "dropout": ("BEAM BLOCKED - holding", (240, 210, 70)),
                  "lost": ("LINK LOST", (255, 170, 60)),
                  "scanning": ("LINK LOST - scanning", (255, 90, 90))}
