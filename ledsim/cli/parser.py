@@ -58,6 +58,18 @@ def _add_scene_args(p) -> None:
                    help="MuJoCo integrator (docs/physics.md compares them)")
 
 
+def _add_run_knobs(p) -> None:
+    """Knobs every run of ``run`` and ``sweep`` shares: length, particles, torque limit."""
+    from ..loop.config import EstimatorPart, WorldPart
+
+    p.add_argument("--torque-limit", type=TORQUE_LIMIT, default=WorldPart.torque_limit,
+                   help="[N m]")
+    p.add_argument("--seconds", type=SECONDS, default=None,
+                   help="length of each run [s] (default: the scenario's, 10 s)")
+    p.add_argument("--particles", type=PARTICLES, default=EstimatorPart.particles,
+                   help="particle-filter size")
+
+
 def _add_loop_args(p) -> None:
     from ..loop.config import LOOP_ESTIMATORS, PHYSICS_SCENARIOS, EstimatorPart, TaskPart
     from ..physics.disturbances import DISTURBANCES
@@ -170,16 +182,11 @@ def build_parser() -> argparse.ArgumentParser:
 
     rn = command("run", "closed loop in MuJoCo: estimator + controller + gimbal")
     _add_loop_args(rn)
-    rn.add_argument("--torque-limit", type=TORQUE_LIMIT, default=W.torque_limit,
-                    help="[N m]")
+    _add_run_knobs(rn)
     rn.add_argument("--noise-scale", type=NOISE_SCALE, default=W.noise_scale,
                     help="multiplies the measurement-noise std")
-    rn.add_argument("--seconds", type=SECONDS, default=None,
-                    help="length of each run [s] (default: the scenario's, 10 s)")
     rn.add_argument("--seeds", type=SEEDS, default=X.seeds,
                     help="Monte-Carlo runs (seeds 0..N-1)")
-    rn.add_argument("--particles", type=PARTICLES, default=E.particles,
-                    help="particle-filter size")
     rn.add_argument("--checkpoint", help="KKL checkpoint trained on the MuJoCo world")
     rn.add_argument("--omega-model", default=E.omega_model,
                     **_choices(("identified", "simulator", "none")),
@@ -225,12 +232,7 @@ def build_parser() -> argparse.ArgumentParser:
     sw.add_argument("--seeds", type=SEEDS, default=2, help="runs per combination")
     sw.add_argument("--scenario", default=T.scenario, **_choices(PHYSICS_SCENARIOS),
                     help="closed-loop scenario")
-    sw.add_argument("--seconds", type=SECONDS, default=None,
-                    help="length of each run [s] (default: the scenario's, 10 s)")
-    sw.add_argument("--particles", type=PARTICLES, default=E.particles,
-                    help="particle-filter size")
-    sw.add_argument("--torque-limit", type=TORQUE_LIMIT, default=W.torque_limit,
-                    help="[N m]")
+    _add_run_knobs(sw)
     sw.add_argument("--no-supervision", action="store_true",
                     help="no loss detection or reacquisition (see ledsim run)")
     _add_scene_args(sw)

@@ -120,6 +120,19 @@ PARTS = {"world": WorldPart, "task": TaskPart, "estimation": EstimatorPart,
          "execution": ExecutionPart}
 
 
+class _PartView:
+    """``run.world`` and the like: one part of a :class:`RunConfig`, read from its flat
+    fields (a new frozen part each time)."""
+
+    def __init__(self, kind):
+        self.kind = kind
+
+    def __get__(self, run, owner=None):
+        if run is None:
+            return self
+        return self.kind(**{f.name: getattr(run, f.name) for f in fields(self.kind)})
+
+
 @dataclass
 class RunConfig:
     """Everything one ``ledsim run`` needs: its four parts (:class:`WorldPart`,
@@ -152,24 +165,10 @@ class RunConfig:
         return cls(**asdict(world), **asdict(task), **asdict(estimation),
                    **asdict(execution))
 
-    def _part(self, kind):
-        return kind(**{f.name: getattr(self, f.name) for f in fields(kind)})
-
-    @property
-    def world(self) -> WorldPart:
-        return self._part(WorldPart)
-
-    @property
-    def task(self) -> TaskPart:
-        return self._part(TaskPart)
-
-    @property
-    def estimation(self) -> EstimatorPart:
-        return self._part(EstimatorPart)
-
-    @property
-    def execution(self) -> ExecutionPart:
-        return self._part(ExecutionPart)
+    world = _PartView(WorldPart)
+    task = _PartView(TaskPart)
+    estimation = _PartView(EstimatorPart)
+    execution = _PartView(ExecutionPart)
 
     def validate(self) -> None:
         for flag, value, registry in (("scenario", self.scenario, PHYSICS_SCENARIOS),
