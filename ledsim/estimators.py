@@ -67,11 +67,7 @@ def build_estimator(name: str, system: DiscreteSystem, *, model: DiscreteSystem 
     if name in ("kkl", "kkl-paper"):
         if checkpoint is None:
             raise LedsimError(f"estimator {name!r} needs a checkpoint")
-        obs = ckpt.load(checkpoint, system)
-        obs.name = name
-        obs.system = model
-        obs.use_omega = use_omega
-        return obs
+        return ckpt.load(checkpoint, system, model=model, use_omega=use_omega, name=name)
     if name == "kkl-handover":
         if checkpoint is None or slow_checkpoint is None:
             raise LedsimError("estimator 'kkl-handover' needs a fast and a slow checkpoint")

@@ -90,8 +90,14 @@ def metadata(path: str | Path) -> dict:
                               f"checkpoint ({type(exc).__name__})") from None
 
 
-def load(path: str | Path, system: DiscreteSystem, check: bool = True) -> KKLObserver:
-    """Load a checkpoint for ``system``; raise :class:`CheckpointError` if it does not fit."""
+def load(path: str | Path, system: DiscreteSystem, check: bool = True, *,
+         model: DiscreteSystem | None = None, use_omega: bool = True,
+         name: str | None = None) -> KKLObserver:
+    """Load a checkpoint for ``system``; raise :class:`CheckpointError` if it does not fit.
+
+    ``model``: what the observer computes with (Omega's f, the h of missing samples;
+    default ``system``); ``use_omega``: apply the Omega correction; ``name``: the
+    estimator's name in tables (default ``kkl``)."""
     path = Path(path)
     if not path.is_file():
         raise CheckpointError(f"checkpoint {str(path)!r} does not exist")
@@ -116,7 +122,10 @@ def load(path: str | Path, system: DiscreteSystem, check: bool = True) -> KKLObs
             key, saved, current = mismatch
             raise CheckpointError(f"checkpoint {str(path)!r} was trained with {key}={saved!r} "
                                   f"but the run uses {key}={current!r}")
-    obs = KKLObserver(system, lam, B, enc, dec, u_bar=u_bar)
+    obs = KKLObserver(system if model is None else model, lam, B, enc, dec, u_bar=u_bar,
+                      use_omega=use_omega)
+    if name is not None:
+        obs.name = name
     obs.training_metadata = {k: meta[k] for k in ("design", "training", "report") if k in meta}
     return obs
 
