@@ -123,3 +123,67 @@ class LinkConstants:
         d["receiver"] = ReceiverResponse(**d.get("receiver", {}))
         d["process_noise_std"] = tuple(d.get("process_noise_std", (1e-4, 2e-4)))
         return cls(**d)
+
+
+@dataclass(frozen=True)
+class NavigationNoise:
+    """Noise of the vehicle's own sensors (SI units), with where each figure comes from.
+
+    White noise is given as a density and sampled once per control step Te, over the
+    bandwidth 1 / (2 Te): standard deviation = density x sqrt(1 / (2 Te)). A bias drifts
+    as a first-order Gauss-Markov process whose stationary spread is the datasheet's
+    in-run bias instability (the usual model of that figure), and starts at a draw from
+    that spread (what is left after the vehicle's own calibration).
+
+    Attributes:
+        gyro_noise_density: [rad/s/sqrt(Hz)]; 0.007 deg/s/sqrt(Hz), Xsens MTi-1 series
+            datasheet (a small industrial MEMS IMU).
+        gyro_bias_instability: [rad/s]; 10 deg/h, same datasheet.
+        gyro_bias_time: correlation time of the gyro bias's drift [s].
+        accel_noise_density: [m/s^2/sqrt(Hz)]; 120 ug/sqrt(Hz), same datasheet.
+        accel_bias_instability: [m/s^2]; 0.03 mg, same datasheet.
+        accel_bias_time: correlation time of the accelerometer bias's drift [s].
+        dvl_noise: standard deviation of one DVL velocity measurement, each axis [m/s]:
+            a few mm/s, the single-ping noise manufacturers of 1 MHz bottom-tracking DVLs
+            quote at these low speeds (e.g. Nortek DVL1000); its long-term bias (about
+            0.1 %) is left out.
+        dvl_rate: DVL pings per second [Hz] (8 Hz: the DVL1000's highest rate); the last
+            velocity is held between pings.
+        encoder_bits: resolution of the gimbal's absolute encoder [bits]: 14, a magnetic
+            encoder such as ams AS5047P (a step of 2 pi / 2^14 = 3.8e-4 rad).
+        fix_noise: standard deviation of an acoustic position fix, each axis [m]: a short
+            baseline or USBL fix at a few metres (about 1 % of the range).
+        fix_rate: acoustic fixes per second [Hz].
+    """
+
+    gyro_noise_density: float = math.radians(0.007)
+    gyro_bias_instability: float = math.radians(10.0) / 3600.0
+    gyro_bias_time: float = 100.0
+    accel_noise_density: float = 120e-6 * 9.81
+    accel_bias_instability: float = 0.03e-3 * 9.81
+    accel_bias_time: float = 100.0
+    dvl_noise: float = 0.004
+    dvl_rate: float = 8.0
+    encoder_bits: int = 14
+    fix_noise: float = 0.03
+    fix_rate: float = 1.0
+
+    def __post_init__(self) -> None:
+        for name in ("gyro_noise_density", "gyro_bias_instability", "accel_noise_density",
+                     "accel_bias_instability", "dvl_noise", "fix_noise"):
+            value = getattr(self, name)
+            if not (math.isfinite(value) and value >= 0):
+                raise ConfigError(f"{name}={value!r} is not allowed: must be >= 0 and finite")
+        for name in ("gyro_bias_time", "accel_bias_time", "dvl_rate", "fix_rate"):
+            value = getattr(self, name)
+            if not (math.isfinite(value) and value > 0):
+                raise ConfigError(f"{name}={value!r} is not allowed: must be > 0 and finite")
+        if not (isinstance(self.encoder_bits, int) and 1 <= self.encoder_bits <= 32):
+            raise ConfigError(f"encoder_bits={self.encoder_bits!r} is not allowed: must be an "
+                              "integer in 1..32")
+
+    @property
+    def encoder_step(self) -> float:
+        """Quantisation step of the encoder [rad]."""
+        return 2.0 * math.pi / 2**self.encoder_bits
+

@@ -11,6 +11,7 @@ from __future__ import annotations
 import math
 from dataclasses import dataclass, field
 from pathlib import Path
+from typing import NamedTuple
 
 import mujoco
 import numpy as np
@@ -193,6 +194,8 @@ class SceneIds:
         photodiode_sites: site ids of photodiodes 1 and 2; led_site: the LED's site id.
         hinge_qpos, hinge_dof: the gimbal hinge's address in qpos and in qvel.
         motor: actuator id of the gimbal motor.
+        vehicle_sensors: sensordata addresses of the vehicle's sensors, in the order of
+            :data:`VEHICLE_SENSORS` (None: the scene lacks one of them).
     """
 
     hull_body: int
@@ -202,12 +205,40 @@ class SceneIds:
     hinge_qpos: int
     hinge_dof: int
     motor: int
+    vehicle_sensors: tuple[int, ...] | None = None
 
     @classmethod
     def of(cls, m) -> SceneIds:
         hinge = m.joint("gimbal_hinge")
+        names = [m.sensor(i).name for i in range(m.nsensor)]
+        adr = (tuple(int(m.sensor(n).adr[0]) for n in VEHICLE_SENSORS)
+               if all(n in names for n in VEHICLE_SENSORS) else None)
         return cls(int(m.body("auv").id), int(m.body("gimbal").id),
                    (int(m.site("pd1").id), int(m.site("pd2").id)), int(m.site("led").id),
                    int(hinge.qposadr[0]), int(hinge.dofadr[0]),
-                   int(m.actuator("gimbal_motor").id))
+                   int(m.actuator("gimbal_motor").id), adr)
+
+
+#: The vehicle's MuJoCo sensors by name: the IMU's gyro and accelerometer, the DVL (a
+#: velocimeter), the gimbal's encoder (jointpos) and the acoustic position fix (framepos).
+VEHICLE_SENSORS = ("imu_gyro", "imu_accel", "dvl_velocity", "gimbal_encoder",
+                   "acoustic_fix")
+
+
+class VehicleMotion(NamedTuple):
+    """The noise-free values of the vehicle's sensors at one instant (SI units).
+
+    Attributes:
+        gyro: hull angular velocity in the IMU frame [rad/s], (3,).
+        accel: specific force in the IMU frame [m/s^2], (3,) (from the last physics step).
+        dvl: hull velocity at the DVL in its frame [m/s], (3,) (z points down).
+        encoder: the gimbal hinge angle [rad].
+        position: the IMU's position in the world frame [m], (3,).
+    """
+
+    gyro: np.ndarray
+    accel: np.ndarray
+    dvl: np.ndarray
+    encoder: float
+    position: np.ndarray
 

@@ -16,6 +16,7 @@ led_pos, led_rotation    LED position and orientation (z: its axis)  m, -
 hinge_axis               the gimbal's rotation axis                  -
 hull_pos, hull_yaw       AUV position and heading                    m, rad
 hull_velocity            (angular, linear) velocity of the hull      rad/s, m/s
+vehicle_motion           IMU, DVL, encoder, position (noise-free)    SI
 add_hull_wrench          force and torque on the hull this step      N, N m
 set_current              water velocity (MuJoCo's medium velocity)   m/s
 set_transmitter          LED platform pose and velocity              m, rad, m/s
@@ -33,6 +34,7 @@ from contextlib import contextmanager
 import mujoco
 import numpy as np
 
+from . import scene
 from .scene import SCENE, SceneIds, WorldConfig, WorldError, build_spec, set_buoyancy
 
 __all__ = ["LinkWorld", "WorldConfig", "WorldError", "SCENE"]
@@ -181,9 +183,11 @@ class LinkWorld:
 
     def photodiode_velocity(self, i: int) -> np.ndarray:
         """(angular, linear) velocity of photodiode i in the world frame, shape (6,)."""
+        return self._velocity(mujoco.mjtObj.mjOBJ_SITE, self._pd[i])
+
+    def _velocity(self, kind, index: int) -> np.ndarray:
         res = np.zeros(6)
-        mujoco.mj_objectVelocity(self.model, self.data, mujoco.mjtObj.mjOBJ_SITE,
-                                 self._pd[i], res, 0)
+        mujoco.mj_objectVelocity(self.model, self.data, kind, index, res, 0)
         return res
 
     @property
@@ -231,10 +235,20 @@ class LinkWorld:
 
     def hull_velocity(self) -> np.ndarray:
         """(angular, linear) velocity of the hull in the world frame, shape (6,)."""
-        res = np.zeros(6)
-        mujoco.mj_objectVelocity(self.model, self.data, mujoco.mjtObj.mjOBJ_BODY, self._auv,
-                                 res, 0)
-        return res
+        return self._velocity(mujoco.mjtObj.mjOBJ_BODY, self._auv)
+
+    def vehicle_motion(self) -> scene.VehicleMotion | None:
+        """The vehicle's own sensors, noise-free, at the current state (None: the scene
+        has none); :class:`~ledsim.physics.navigation.NavigationSensor` adds the noise."""
+        adr = self.ids.vehicle_sensors
+        if adr is None:
+            return None
+        m, d = self.model, self.data
+        mujoco.mj_sensorPos(m, d)  # writes sensordata only: the dynamics are untouched
+        mujoco.mj_sensorVel(m, d)
+        s, (g, a, v, e, p) = d.sensordata, adr
+        return scene.VehicleMotion(s[g:g + 3].copy(), s[a:a + 3].copy(), s[v:v + 3].copy(),
+                             float(s[e]), s[p:p + 3].copy())
 
     def clear_hull_wrench(self) -> None:
         """Remove the external force and torque on the hull (start of a control step)."""
