@@ -119,3 +119,40 @@ def test_a_scene_without_the_sensors_is_refused_in_one_line(tmp_path):
 def test_bad_noise_settings_are_refused(bad):
     with pytest.raises(ConfigError, match=next(iter(bad))):
         NavigationNoise(**bad)
+
+
+def test_the_thrusters_push_the_hull_within_their_limits():
+    w = LinkWorld()
+    w.reset()
+    surge, sway, yaw = w.ids.thrusters
+    assert list(w.model.actuator_ctrlrange[[surge, sway, yaw], 1]) == [100.0, 100.0, 25.0]
+    w.data.ctrl[surge] = 1e6  # clipped at 100 N
+    w.step(50)  # 0.1 s
+    v = w.hull_velocity()[3:]
+    assert 0.05 < v[0] < 0.1 * 100 / 30 and abs(v[1]) < 1e-3  # at most F t / m, forward
+
+
+def test_dead_reckoning_follows_a_drifting_turning_hull():
+    from observer.navigation import DeadReckoning
+
+    w = LinkWorld()
+    w.reset()
+    dist = [parse_disturbance("current:speed=0.2,heading=1.2,gust=0.05,hold=0"),
+            parse_disturbance("kick:start=1,rate=0.5,hull=1")]
+    for d in dist:
+        d.reset(0)
+    prepare(w, dist, 0.0)
+    m = w.model
+    R = np.zeros(9)
+    mujoco.mju_quat2Mat(R, m.site_quat[m.site("dvl").id])
+    nav = DeadReckoning(0.01, w.hull_pos[:2], w.hull_yaw, R.reshape(3, 3),
+                        m.site_pos[m.site("dvl").id] - m.site_pos[m.site("imu").id])
+    sensor = NavigationSensor(w, 0.01, seed=1)
+    for k in range(1000):  # 10 s: the hull drifts about a metre and turns
+        r = sensor.read()
+        s = nav.update(r.gyro, r.dvl, r.position_fix)
+        advance(w, dist, 0.0, (k + 1) * 0.01)
+    w.forward_kinematics()
+    assert np.linalg.norm(w.hull_pos[:2]) > 0.5  # it did drift (it started at the origin)
+    assert np.linalg.norm(s.position - w.hull_pos[:2]) < 0.05
+    assert abs(s.heading - w.hull_yaw) < 0.01

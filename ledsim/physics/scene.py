@@ -196,6 +196,8 @@ class SceneIds:
         motor: actuator id of the gimbal motor.
         vehicle_sensors: sensordata addresses of the vehicle's sensors, in the order of
             :data:`VEHICLE_SENSORS` (None: the scene lacks one of them).
+        thrusters: actuator ids of the hull's surge, sway and yaw thrusters (None: the
+            scene lacks one of them).
     """
 
     hull_body: int
@@ -206,23 +208,31 @@ class SceneIds:
     hinge_dof: int
     motor: int
     vehicle_sensors: tuple[int, ...] | None = None
+    thrusters: tuple[int, int, int] | None = None
 
     @classmethod
     def of(cls, m) -> SceneIds:
         hinge = m.joint("gimbal_hinge")
-        names = [m.sensor(i).name for i in range(m.nsensor)]
+        sensors = [m.sensor(i).name for i in range(m.nsensor)]
         adr = (tuple(int(m.sensor(n).adr[0]) for n in VEHICLE_SENSORS)
-               if all(n in names for n in VEHICLE_SENSORS) else None)
+               if all(n in sensors for n in VEHICLE_SENSORS) else None)
+        actuators = [m.actuator(i).name for i in range(m.nu)]
+        thrusters = (tuple(int(m.actuator(n).id) for n in THRUSTERS)
+                     if all(n in actuators for n in THRUSTERS) else None)
         return cls(int(m.body("auv").id), int(m.body("gimbal").id),
                    (int(m.site("pd1").id), int(m.site("pd2").id)), int(m.site("led").id),
                    int(hinge.qposadr[0]), int(hinge.dofadr[0]),
-                   int(m.actuator("gimbal_motor").id), adr)
+                   int(m.actuator("gimbal_motor").id), adr, thrusters)
 
 
 #: The vehicle's MuJoCo sensors by name: the IMU's gyro and accelerometer, the DVL (a
 #: velocimeter), the gimbal's encoder (jointpos) and the acoustic position fix (framepos).
 VEHICLE_SENSORS = ("imu_gyro", "imu_accel", "dvl_velocity", "gimbal_encoder",
                    "acoustic_fix")
+
+
+#: The hull's thrusters by name: surge and sway forces [N], yaw torque [N m].
+THRUSTERS = ("thruster_surge", "thruster_sway", "thruster_yaw")
 
 
 class VehicleMotion(NamedTuple):
