@@ -3,7 +3,7 @@
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass, field
+from dataclasses import asdict, dataclass, field
 
 import numpy as np
 
@@ -11,6 +11,7 @@ from observer.metrics import rmse
 
 from ..config import LinkConstants
 from ..control import intensity_maximum
+from ..linkbudget import link_budget
 from ..optics import peak_power
 from ..results import DictAccess
 
@@ -38,6 +39,10 @@ class RunMetrics(DictAccess):
         detection_delay: from the start of a transient event to the first loss flagged
             that is still on at its start or begins after it [s] (0 when flagged
             before the start; None: no event, or no loss flagged).
+        snr_db, ber, throughput_bps, fec_share: the link budget of on-off keyed data
+            on photodiode 1 (:mod:`ledsim.linkbudget`: SNR [dB], bit error rate [-],
+            bits delivered under the FEC limit per second [bit/s], share of the run
+            under it [-]).
     """
 
     rmse: dict
@@ -49,6 +54,10 @@ class RunMetrics(DictAccess):
     lost_share: float = 0.0
     link_events: list = field(default_factory=list)
     detection_delay: float | None = None
+    snr_db: float | None = None
+    ber: float | None = None
+    throughput_bps: float | None = None
+    fec_share: float | None = None
 
 
 def link_events(lost: np.ndarray, Te: float) -> list[list]:
@@ -75,7 +84,8 @@ def run_metrics(x: np.ndarray, xhat: np.ndarray, power_clean: np.ndarray, steady
                 constants: LinkConstants, event_end: float | None = None,
                 lost: np.ndarray | None = None,
                 event_start: float | None = None,
-                power_max: np.ndarray | None = None) -> RunMetrics:
+                power_max: np.ndarray | None = None,
+                noise_std: float | None = None) -> RunMetrics:
     """Metrics of one run from its true state, estimate and noise-free powers.
 
     Args:
@@ -88,6 +98,7 @@ def run_metrics(x: np.ndarray, xhat: np.ndarray, power_clean: np.ndarray, steady
         event_start: start of a transient event [s] for the detection delay.
         power_max: most P1 could receive at each step [W] (None: the peak at the
             configured distance, constant).
+        noise_std: the sensor's noise [W] (None: no link budget).
     """
     Te = constants.Te
     e = rmse(xhat, x)
@@ -104,6 +115,7 @@ def run_metrics(x: np.ndarray, xhat: np.ndarray, power_clean: np.ndarray, steady
         # occluder's edge dims the beam before its nominal start).
         after = [a for a, b in events if b is None or b > event_start + 1e-9]
         delay = max(after[0] - event_start, 0.0) if after else None
+    budget = {} if noise_std is None else asdict(link_budget(p1, noise_std, Te))
     return RunMetrics(
         rmse={"x1": float(e[0]), "x2": float(e[1])},
         rmse_steady={"x1": float(es[0]), "x2": float(es[1])},
@@ -113,4 +125,4 @@ def run_metrics(x: np.ndarray, xhat: np.ndarray, power_clean: np.ndarray, steady
         mean_power=float(np.mean(p1)),
         recovery_time=recovery,
         lost_share=0.0 if lost is None else float(np.mean(lost)),
-        link_events=events, detection_delay=delay)
+        link_events=events, detection_delay=delay, **budget)

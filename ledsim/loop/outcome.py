@@ -75,7 +75,8 @@ def outcome(res, xhat: np.ndarray, flags: np.ndarray, cfg: RunConfig, constants,
                           constants, events[0].event_end if events else None,
                           lost=flags[:, 0] if supervised else None,
                           event_start=events[0].start if events else None,
-                          power_max=achievable_power(res, constants))
+                          power_max=achievable_power(res, constants),
+                          noise_std=constants.measurement_noise_std * cfg.noise_scale)
     trace = Trace(res.t, res.x, xhat, res.power, res.power_clean, res.torque,
                   res.occluded, flags[:, 0], flags[:, 1]) if keep_trace else None
     return RunOutcome(metrics, 1e6 * spent / len(res.t),

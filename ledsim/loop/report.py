@@ -11,6 +11,7 @@ import numpy as np
 
 from observer.metrics import mean_and_spread
 
+from ..linkbudget import BIT_RATE
 from ..montecarlo import run_jobs
 from ..outputs import atomic_write_bytes
 from ..results import DictAccess, write_json
@@ -63,6 +64,11 @@ class RunSummary(DictAccess):
     recovery_time: Stat
     lost_share: Stat
     detection_delay: Stat
+    snr_db: Stat
+    ber: Stat
+    throughput_bps: Stat
+    fec_share: Stat
+    bit_rate: float
     link_events: list
     supervision: bool
     us_per_step: Stat
@@ -87,6 +93,11 @@ def summarize(cfg: RunConfig, outs: list[RunOutcome]) -> RunSummary:
         recovery_time=stat(lambda o: o.metrics.recovery_time),
         lost_share=stat(lambda o: o.metrics.lost_share),
         detection_delay=stat(lambda o: o.metrics.detection_delay),
+        snr_db=stat(lambda o: o.metrics.snr_db),
+        ber=stat(lambda o: o.metrics.ber),
+        throughput_bps=stat(lambda o: o.metrics.throughput_bps),
+        fec_share=stat(lambda o: o.metrics.fec_share),
+        bit_rate=BIT_RATE,
         link_events=[{"seed": k, "lost_recovered": o.metrics.link_events}
                      for k, o in enumerate(outs)],
         supervision=cfg.supervision,
@@ -149,8 +160,8 @@ def write_run(summary: RunSummary, trace: Trace | None, out: Path,
 
 
 TABLE_HEADER = ("| scenario | disturbance | estimator | x1 RMSE [rad] | x2 RMSE [rad/s] "
-                "| align time [s] | availability | mean P1 [W] | recovery [s] | RTF |\n"
-                "|---|---|---|---|---|---|---|---|---|---|")
+                "| align time [s] | availability | FEC share | mean P1 [W] | recovery [s] "
+                "| RTF |\n|---|---|---|---|---|---|---|---|---|---|---|")
 
 
 def format_summary(s: RunSummary, first_cell: str | None = None) -> str:
@@ -161,5 +172,6 @@ def format_summary(s: RunSummary, first_cell: str | None = None) -> str:
     return (f"| {first_cell or s.scenario} | {', '.join(s.disturbances) or '-'} "
             f"| {s.estimator} | {f(s.rmse_steady_x1)} | {f(s.rmse_steady_x2)} "
             f"| {f(s.alignment_time, '{:.2f}')} | {f(s.availability, '{:.3f}')} "
-            f"| {f(s.mean_power, '{:.3f}')} | {f(s.recovery_time, '{:.2f}')} "
+            f"| {f(s.fec_share, '{:.3f}')} | {f(s.mean_power, '{:.3f}')} "
+            f"| {f(s.recovery_time, '{:.2f}')} "
             f"| {f(s.realtime_factor, '{:.0f}')} |")

@@ -43,7 +43,8 @@ CELL_COLUMNS = ("scenario", "estimator", "disturbance", "distance", "noise_scale
 #: Columns that measure the run (units as in :class:`~ledsim.loop.metrics.RunMetrics`).
 METRIC_COLUMNS = ("rmse_x1", "rmse_x2", "rmse_steady_x1", "rmse_steady_x2",
                   "alignment_time", "availability", "mean_power", "recovery_time",
-                  "lost_share", "detection_delay", "losses")
+                  "lost_share", "detection_delay", "losses", "snr_db", "ber",
+                  "throughput_bps", "fec_share")
 #: Columns that depend on the machine and its load: the only ones that may differ
 #: between backends or reruns.
 TIMING_COLUMNS = ("us_per_step", "realtime_factor")
@@ -142,6 +143,8 @@ def run_cell(job: tuple[RunConfig, Cell]) -> dict:
            "alignment_time": m.alignment_time, "availability": m.availability,
            "mean_power": m.mean_power, "recovery_time": m.recovery_time,
            "lost_share": m.lost_share, "detection_delay": m.detection_delay,
+           "snr_db": m.snr_db, "ber": m.ber, "throughput_bps": m.throughput_bps,
+           "fec_share": m.fec_share,
            "losses": len(m.link_events),
            "us_per_step": out.us_per_step, "realtime_factor": out.realtime_factor}
     return {"version": __version__, "row": to_jsonable(row)}
@@ -211,7 +214,7 @@ def summarize_rows(rows: list[dict]) -> list[dict]:
     for combo, rs in groups.items():
         s = dict(zip(keys, combo, strict=True), runs=len(rs))
         for m in ("rmse_steady_x1", "rmse_steady_x2", "availability", "recovery_time",
-                  "lost_share"):
+                  "lost_share", "fec_share", "throughput_bps"):
             stat = Stat.over(r[m] for r in rs)
             s[f"{m}_mean"], s[f"{m}_std"] = stat.mean, stat.std
         out.append(s)
