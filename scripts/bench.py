@@ -169,7 +169,9 @@ def batched_speed(n_worlds: int = 16, threads: int = 1, estimator: str = "kkl",
         outs = loop.run(keep_trace=True)
         best = min(best, time.perf_counter() - t0)
         sub = worlds[0].config.substeps
-        ctrl = np.repeat(np.stack([o.trace.torque for o in outs]), sub, axis=1)[..., None]
+        ctrl = np.zeros((n_worlds, loop.steps * sub, m.nu))  # the thrusters stay idle
+        ctrl[..., worlds[0].ids.motor] = np.repeat(np.stack([o.trace.torque for o in outs]),
+                                                   sub, axis=1)
         data = [mujoco.MjData(m) for _ in range(threads)]
         with rollout.Rollout(nthread=threads if threads > 1 else 0) as r:
             t0 = time.perf_counter()
