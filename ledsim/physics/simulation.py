@@ -13,7 +13,7 @@ import csv
 import math
 import sys
 from collections.abc import Callable, Sequence
-from dataclasses import dataclass, fields
+from dataclasses import dataclass
 from pathlib import Path
 
 import numpy as np
@@ -53,31 +53,26 @@ def torque_profile(name: str, amplitude: float = 0.005, frequency: float = 0.5,
 
 
 @dataclass
-class SimulationResult:
-    """Time series of a run; arrays have one row per control step.
+class SimulationResult(SensorReading):
+    """Time series of a run: the fields of :class:`SensorReading`, one row per control
+    step (phi [rad], phidot [rad/s], gimbal_angle [rad], gimbal_rate [rad/s]: (N,);
+    power, power_clean [W], incidence_angle, emission_angle [rad], distance [m],
+    visible_fraction: (N, 2); hull_pos [m]: (N, 3)), and
 
     Attributes:
-        t [s], phi [rad], phidot [rad/s] (true state of photodiode 1), gimbal_angle [rad],
-        gimbal_rate [rad/s], torque [N m], power and power_clean [W] (N, 2),
-        incidence_angle and emission_angle [rad] (N, 2), distance [m] (N, 2),
-        visible_fraction (N, 2), occluded (N, 2) bool (any aperture ray blocked),
-        hull_pos [m] (N, 3).
+        t: time of each step [s], (N,).
+        torque: the motor torque applied [N m], (N,).
+        occluded: (N, 2) bool, any aperture ray of the photodiode blocked.
     """
 
     t: np.ndarray
-    phi: np.ndarray
-    phidot: np.ndarray
-    gimbal_angle: np.ndarray
-    gimbal_rate: np.ndarray
     torque: np.ndarray
-    power: np.ndarray
-    power_clean: np.ndarray
-    incidence_angle: np.ndarray
-    emission_angle: np.ndarray
-    distance: np.ndarray
-    visible_fraction: np.ndarray
     occluded: np.ndarray
-    hull_pos: np.ndarray
+
+    #: The order of the series in files (``save_npz``, ``save_csv``).
+    SERIES = ("t", "phi", "phidot", "gimbal_angle", "gimbal_rate", "torque", "power",
+              "power_clean", "incidence_angle", "emission_angle", "distance",
+              "visible_fraction", "occluded", "hull_pos")
 
     @classmethod
     def from_steps(cls, t: np.ndarray, geo: np.ndarray, state: np.ndarray,
@@ -97,7 +92,7 @@ class SimulationResult:
         return np.stack([self.phi, self.phidot], axis=-1)
 
     def arrays(self) -> dict[str, np.ndarray]:
-        return {f.name: getattr(self, f.name) for f in fields(self)}
+        return {name: getattr(self, name) for name in self.SERIES}
 
     def save_npz(self, path: Path) -> None:
         atomic_write_bytes(Path(path), lambda tmp: np.savez_compressed(
