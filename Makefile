@@ -22,7 +22,7 @@ $(STAMP): pyproject.toml
 $(STAMP_ALL): $(STAMP)
 	$(BIN)/pip install -q --timeout 10 --retries 0 --index-url $(TORCH_INDEX) torch==2.13.0 \
 		|| $(BIN)/pip install -q torch==2.13.0
-	$(BIN)/pip install -q -e '.[dev,ray,onnx,train]'
+	$(BIN)/pip install -q -e '.[dev,ray,onnx,train,rl]'
 	@touch $(STAMP_ALL)
 
 demo: $(STAMP)

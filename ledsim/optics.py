@@ -109,6 +109,13 @@ def peak_power(c: LinkConstants) -> float:
 IMPOSSIBLE_SIGMAS = 20.0
 
 
+def achievable_power(distance, emission_angle, c: LinkConstants, peak_response: float):
+    """Most photodiode 1 can receive at a distance [m] and emission angle [rad]: the
+    transmitter gain there times the receiver's peak response ``peak_response`` (g at
+    the intensity maximum) [W]; any shapes."""
+    return transmitter_gain(distance, emission_angle, c) * peak_response
+
+
 def plausible_power_range(c: LinkConstants) -> tuple[np.ndarray, np.ndarray]:
     """(low, high) of physically possible measured powers of the two photodiodes [W]."""
     sigma = c.measurement_noise_std

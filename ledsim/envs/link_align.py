@@ -6,7 +6,9 @@ under the chosen disturbances, from the photodiode powers alone. The world is
 ``scenario="align"`` the episode of ``reset(seed=K)`` is seed K of
 ``ledsim run --scenario align`` until the actions differ.
 
-**Observation** (``Box(-inf, inf, (2,), float64)``)
+**Observation** (``Box(low, high, (2,), float64)``: from 20 noise standard deviations
+below zero to the power at 1 cm from the LED plus as much; a measured power never
+leaves it)
 
 ===  ===============================================  =====
 idx  observation                                      unit
@@ -25,9 +27,12 @@ idx  action                                           unit
 
 A float64 action is applied in full precision (the shipped policy relies on it).
 
-**Reward**: the noise-free power of photodiode 1 divided by its peak (0..1): the share of
-the best possible link quality received this step. **Episode**: never terminates (a lost
-link can be found again); truncated after 1000 steps (10 s) by ``gymnasium.make``.
+**Reward**, in [0, 1]: the noise-free power of photodiode 1 over the most it could
+receive at that moment's geometry (the LED's distance and angle, a perfectly pointed
+photodiode: what ``availability`` compares with): the share of the achievable link
+received this step. Moving the vehicle closer to the LED raises both alike, so only
+pointing earns reward. **Episode**: never terminates (a lost link can be found again);
+truncated after 1000 steps (10 s) by ``gymnasium.make``.
 ``info`` holds the true state (``phi`` [rad], ``phidot`` [rad/s]), the noise-free
 powers and the time [s], for evaluation only.
 """
@@ -42,14 +47,19 @@ from gymnasium import spaces
 from gymnasium.utils import EzPickle
 
 from ..config import LinkConstants
+from ..control import intensity_maximum
 from ..loop.closed_loop import control_step, identified_model, run_supervisor, start_world
 from ..loop.config import RunConfig, TaskPart, WorldPart
 from ..loop.gate import DropoutGate
-from ..optics import peak_power
+from ..optics import IMPOSSIBLE_SIGMAS, achievable_power, peak_power, receiver_response
 from ..physics.sensor import SensorReading
 from ..physics.system import GimbalSystem
 from ..physics.tick import advance
 from ..step import GimbalMotor
+
+#: The closest the receiver can come to the LED [m] (their housings touch): the
+#: observation space's upper bound is the power there.
+MIN_DISTANCE = 0.01
 
 
 class LinkAlignEnv(gym.Env, EzPickle):
@@ -110,12 +120,16 @@ class LinkAlignEnv(gym.Env, EzPickle):
         self.disturbance_specs = self.cfg.disturbances
         self.torque_limit = torque_limit
         self.phi0_range = phi0_range
-        self.peak = peak_power(self.system.constants)
+        c = self.system.constants
+        self.peak = peak_power(c)
+        self.peak_response = float(receiver_response(intensity_maximum(c), c.receiver))
+        margin = IMPOSSIBLE_SIGMAS * c.measurement_noise_std * self.cfg.noise_scale
+        closest = float(achievable_power(MIN_DISTANCE, 0.0, c, self.peak_response))
         self.render_mode = render_mode
         self.metadata = {**self.metadata, "render_fps": int(round(1.0 / self.dt))}
         self._render_args = (width, height, camera)
         self._recorder = None
-        self.observation_space = spaces.Box(-np.inf, np.inf, (2,), np.float64)
+        self.observation_space = spaces.Box(-margin, closest + margin, (2,), np.float64)
         self.action_space = spaces.Box(-1.0, 1.0, (1,), np.float32)
         self.sensor = None
         self.disturbances: list = []
@@ -129,7 +143,16 @@ class LinkAlignEnv(gym.Env, EzPickle):
         r = self.reading = self.sensor.read()
         info = {"phi": r.phi, "phidot": r.phidot, "power_clean": r.power_clean.copy(),
                 "time": self.k * self.dt}
-        return r.power.astype(np.float64), info
+        space = self.observation_space
+        return np.clip(r.power.astype(np.float64), space.low, space.high), info
+
+    def share_of_achievable(self) -> float:
+        """Photodiode 1's noise-free power over the most the current geometry allows
+        (the reward) [-]; round-off above 1 is cut."""
+        r = self.reading
+        best = float(achievable_power(r.distance[0], r.emission_angle[0],
+                                      self.system.constants, self.peak_response))
+        return min(1.0, float(r.power_clean[0]) / best) if best > 0 else 0.0
 
     def reset(self, *, seed: int | None = None, options: dict | None = None):
         super().reset(seed=seed)
@@ -158,7 +181,7 @@ class LinkAlignEnv(gym.Env, EzPickle):
         self.k += 1
         advance(self.world, self.disturbances, a * self.torque_limit, self.k * self.dt)
         obs, info = self._observe()
-        reward = float(self.reading.power_clean[0] / self.peak)
+        reward = self.share_of_achievable()
         return obs, reward, False, False, info
 
     def render(self):
@@ -256,8 +279,12 @@ class EstimatorObservation(gym.ObservationWrapper):
         self.cfg = replace(base.cfg, estimator=estimator)
         self.cfg.validate()
         self.lost_flag = lost_flag
-        self.observation_space = spaces.Box(-np.inf, np.inf, (5 if lost_flag else 4,),
-                                            np.float64)
+        low, high = env.observation_space.low, env.observation_space.high
+        dom = np.array([np.inf, np.inf])  # the estimate: unbounded (NaN-free)
+        low, high = np.r_[low, -dom], np.r_[high, dom]
+        if lost_flag:
+            low, high = np.r_[low, 0.0], np.r_[high, 1.0]
+        self.observation_space = spaces.Box(low, high, dtype=np.float64)
         self.supervisor = None
         self.decision = None
 

@@ -1,0 +1,185 @@
+"""An RL baseline on ledsim/LinkAlign-v0: PPO (8 stacked observations) and RecurrentPPO
+(an LSTM policy), against the shipped stack of ``ledsim run`` (KKL under supervision,
+cascade PI) and the oracle, on the same seeds and disturbances.
+
+    python scripts/rl_baseline.py [--steps 200000] [--disturbance SPEC]... [--seeds 4]
+                                  --out DIR          # needs: pip install 'ledsim[rl,train]'
+
+Training episodes start from a random misalignment in +-0.3 rad (``scenario=None``);
+evaluation episodes start as seeds 100.. of ``ledsim run --scenario align`` (0.3 rad
+off). Writes ``DIR/results.json`` (per policy: ``availability``, the share of the
+steps with at least 90 % of the achievable power, as ``ledsim run`` counts it;
+``mean_return``, the mean episode return of the reward in [0, 1] per step;
+``train_seconds``; ``env_steps``) and ``DIR/learning_curve.png``.
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import os
+import sys
+import time
+from pathlib import Path
+
+from ledsim.montecarlo import WORKER_ENV  # imports no numpy
+
+os.environ.update(WORKER_ENV)  # one BLAS thread: the env is the cost, not the network
+os.environ.setdefault("MUJOCO_GL", "osmesa")
+
+import numpy as np  # noqa: E402
+
+import ledsim.envs  # noqa: E402,F401 (registers the env)
+from ledsim.errors import LedsimError  # noqa: E402
+from ledsim.outputs import atomic_write_text, check_out_dir, output_folder  # noqa: E402
+from ledsim.physics.disturbances import parse_disturbance  # noqa: E402
+
+EVAL_SEED0 = 100
+AVAILABLE = 0.9  # reward (share of the achievable power) counted as available
+
+
+def make_env(disturbances, scenario=None, stack: int = 1):
+    import gymnasium as gym
+    from gymnasium.wrappers import FrameStackObservation
+
+    env = gym.make("ledsim/LinkAlign-v0", scenario=scenario, disturbances=disturbances)
+    return FrameStackObservation(env, stack) if stack > 1 else env
+
+
+def evaluate(policy_for, disturbances, seeds: int, stack: int = 1):
+    """(availability, mean return) over ``seeds`` episodes of the align scenario (seeds
+    100..) of the policy ``policy_for(env)`` gives for each episode's env."""
+    avail, returns = [], []
+    for k in range(seeds):
+        env = make_env(disturbances, "align", stack)
+        act = policy_for(env)
+        obs, _ = env.reset(seed=EVAL_SEED0 + k)
+        rewards, done = [], False
+        while not done:
+            obs, r, term, trunc, _ = env.step(act(obs))
+            rewards.append(r)
+            done = term or trunc
+        env.close()
+        rewards = np.array(rewards)
+        avail.append(float(np.mean(rewards >= AVAILABLE)))
+        returns.append(float(rewards.sum()))
+    return float(np.mean(avail)), float(np.mean(returns))
+
+
+def model_policy(model, recurrent: bool):
+    """``policy_for(env)`` of a trained model (a recurrent one keeps its LSTM state)."""
+    def policy_for(env):
+        memory = {"state": None, "start": True}
+
+        def act(obs):
+            if not recurrent:
+                return model.predict(obs, deterministic=True)[0]
+            action, memory["state"] = model.predict(
+                obs, state=memory["state"], episode_start=np.array([memory["start"]]),
+                deterministic=True)
+            memory["start"] = False
+            return action
+        return act
+    return policy_for
+
+
+def train(name: str, steps: int, disturbances, seed: int = 0):
+    """(model, seconds, episode returns as (env steps, return) pairs)."""
+    from stable_baselines3 import PPO
+    from stable_baselines3.common.monitor import Monitor
+
+    stack = 8 if name == "ppo" else 1
+    env = Monitor(make_env(disturbances, None, stack))
+    common = dict(seed=seed, device="cpu", verbose=0, n_steps=1024, batch_size=256,
+                  gamma=0.99, learning_rate=3e-4)
+    if name == "ppo":
+        model = PPO("MlpPolicy", env, **common)
+    else:
+        from sb3_contrib import RecurrentPPO
+
+        model = RecurrentPPO("MlpLstmPolicy", env, **common)
+    t0 = time.perf_counter()
+    model.learn(steps)
+    seconds = time.perf_counter() - t0
+    lengths = np.cumsum(env.get_episode_lengths())
+    curve = list(zip(lengths.tolist(), env.get_episode_rewards(), strict=True))
+    env.close()
+    return model, seconds, curve
+
+
+def main() -> int:
+    ap = argparse.ArgumentParser(description=__doc__,
+                                 formatter_class=argparse.RawDescriptionHelpFormatter)
+    ap.add_argument("--steps", type=int, default=200_000, help="training steps per policy")
+    ap.add_argument("--disturbance", action="append", default=[], metavar="SPEC",
+                    help="ledsim run's disturbance syntax (repeatable)")
+    ap.add_argument("--seeds", type=int, default=4, help="evaluation episodes")
+    ap.add_argument("--out", required=True, help="output folder")
+    args = ap.parse_args()
+    try:
+        if args.steps < 1:
+            raise LedsimError(f"--steps {args.steps} is not allowed: must be >= 1")
+        if args.seeds < 1:
+            raise LedsimError(f"--seeds {args.seeds} is not allowed: must be >= 1")
+        for d in args.disturbance:
+            parse_disturbance(d)
+        out = check_out_dir(args.out)
+        try:
+            import sb3_contrib  # noqa: F401
+            import stable_baselines3  # noqa: F401
+        except ImportError:
+            raise LedsimError("the RL baseline needs stable-baselines3 and sb3-contrib: "
+                              "pip install 'ledsim[rl,train]'") from None
+    except LedsimError as exc:
+        print(f"rl_baseline: error: {exc}", file=sys.stderr)
+        return 2
+    from ledsim.envs import ShippedAlignmentPolicy
+
+    dist = tuple(args.disturbance)
+    results, curves = {}, {}
+    for name in ("ppo", "recurrent_ppo"):
+        model, seconds, curves[name] = train(name, args.steps, dist)
+        availability, ret = evaluate(model_policy(model, name == "recurrent_ppo"), dist,
+                                     args.seeds, stack=8 if name == "ppo" else 1)
+        results[name] = dict(availability=availability, mean_return=ret,
+                             train_seconds=seconds, env_steps=args.steps)
+        print(name, results[name], flush=True)
+    for name, estimator in (("shipped_kkl", "kkl"), ("oracle", "oracle")):
+        availability, ret = evaluate(
+            lambda env, e=estimator: ShippedAlignmentPolicy(env.unwrapped, e), dist,
+            args.seeds)
+        results[name] = dict(availability=availability, mean_return=ret, train_seconds=0.0,
+                             env_steps=0)
+        print(name, results[name], flush=True)
+    with output_folder(out) as tmp:
+        atomic_write_text(tmp / "results.json", json.dumps(
+            {"disturbances": list(dist), "steps": args.steps, "eval_seeds": args.seeds,
+             **results}, indent=2) + "\n")
+        _plot(curves, tmp / "learning_curve.png")
+    return 0
+
+
+def _plot(curves: dict, path: Path) -> None:
+    from matplotlib.figure import Figure
+
+    from ledsim.outputs import atomic_write_bytes
+
+    fig = Figure(figsize=(7, 4))
+    ax = fig.add_subplot()
+    for name, pts in curves.items():
+        if pts:
+            x, y = np.array(pts).T
+            ax.plot(x, y, ".", alpha=0.3, label=f"{name} (episodes)")
+            k = max(1, len(y) // 20)
+            ax.plot(x[k - 1:], np.convolve(y, np.ones(k) / k, mode="valid"), "-",
+                    label=f"{name} (running mean)")
+    ax.axhline(1000, color="grey", lw=0.8, ls=":")
+    ax.set(xlabel="environment steps", ylabel="episode return (max 1000)",
+           title="LinkAlign-v0: training episodes")
+    ax.legend(fontsize=8)
+    fig.tight_layout()
+    atomic_write_bytes(path, lambda tmp: fig.savefig(tmp, format="png", dpi=100))
+
+
+if __name__ == "__main__":
+    sys.exit(main())
