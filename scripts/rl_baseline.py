@@ -8,7 +8,8 @@ cascade PI) and the oracle, on the same seeds and disturbances.
 Training episodes start from a random misalignment in +-0.3 rad (``scenario=None``);
 evaluation episodes start as seeds 100.. of ``ledsim run --scenario align`` (0.3 rad
 off). Writes ``DIR/results.json`` (per policy: ``availability``, the share of the
-steps with at least 90 % of the achievable power, as ``ledsim run`` counts it;
+steps with at least 90 % of the achievable power, as ``ledsim run`` counts it, and
+``availability_steady`` from 5 s on;
 ``mean_return``, the mean episode return of the reward in [0, 1] per step;
 ``train_seconds``; ``env_steps``) and ``DIR/learning_curve.png``.
 """
@@ -36,6 +37,7 @@ from ledsim.physics.disturbances import parse_disturbance  # noqa: E402
 
 EVAL_SEED0 = 100
 AVAILABLE = 0.9  # reward (share of the achievable power) counted as available
+STEADY_STEP = 500  # the steady window of ledsim run: from 5 s
 
 
 def make_env(disturbances, scenario=None, stack: int = 1):
@@ -46,10 +48,11 @@ def make_env(disturbances, scenario=None, stack: int = 1):
     return FrameStackObservation(env, stack) if stack > 1 else env
 
 
-def evaluate(policy_for, disturbances, seeds: int, stack: int = 1):
-    """(availability, mean return) over ``seeds`` episodes of the align scenario (seeds
-    100..) of the policy ``policy_for(env)`` gives for each episode's env."""
-    avail, returns = [], []
+def evaluate(policy_for, disturbances, seeds: int, stack: int = 1) -> dict:
+    """``availability`` (over the episode, and ``availability_steady`` from 5 s, after
+    any alignment) and ``mean_return`` over ``seeds`` episodes of the align scenario
+    (seeds 100..) of the policy ``policy_for(env)`` gives for each episode's env."""
+    avail, steady, returns = [], [], []
     for k in range(seeds):
         env = make_env(disturbances, "align", stack)
         act = policy_for(env)
@@ -62,8 +65,11 @@ def evaluate(policy_for, disturbances, seeds: int, stack: int = 1):
         env.close()
         rewards = np.array(rewards)
         avail.append(float(np.mean(rewards >= AVAILABLE)))
+        steady.append(float(np.mean(rewards[STEADY_STEP:] >= AVAILABLE)))
         returns.append(float(rewards.sum()))
-    return float(np.mean(avail)), float(np.mean(returns))
+    return dict(availability=float(np.mean(avail)),
+                availability_steady=float(np.mean(steady)),
+                mean_return=float(np.mean(returns)))
 
 
 def model_policy(model, recurrent: bool):
@@ -139,17 +145,14 @@ def main() -> int:
     results, curves = {}, {}
     for name in ("ppo", "recurrent_ppo"):
         model, seconds, curves[name] = train(name, args.steps, dist)
-        availability, ret = evaluate(model_policy(model, name == "recurrent_ppo"), dist,
-                                     args.seeds, stack=8 if name == "ppo" else 1)
-        results[name] = dict(availability=availability, mean_return=ret,
-                             train_seconds=seconds, env_steps=args.steps)
+        scores = evaluate(model_policy(model, name == "recurrent_ppo"), dist, args.seeds,
+                          stack=8 if name == "ppo" else 1)
+        results[name] = dict(**scores, train_seconds=seconds, env_steps=args.steps)
         print(name, results[name], flush=True)
     for name, estimator in (("shipped_kkl", "kkl"), ("oracle", "oracle")):
-        availability, ret = evaluate(
-            lambda env, e=estimator: ShippedAlignmentPolicy(env.unwrapped, e), dist,
-            args.seeds)
-        results[name] = dict(availability=availability, mean_return=ret, train_seconds=0.0,
-                             env_steps=0)
+        scores = evaluate(lambda env, e=estimator: ShippedAlignmentPolicy(env.unwrapped, e),
+                          dist, args.seeds)
+        results[name] = dict(**scores, train_seconds=0.0, env_steps=0)
         print(name, results[name], flush=True)
     with output_folder(out) as tmp:
         atomic_write_text(tmp / "results.json", json.dumps(

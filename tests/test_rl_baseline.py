@@ -24,8 +24,8 @@ def test_a_short_baseline_writes_every_policys_figures(tmp_path):
     assert r.returncode == 0, r.stderr
     res = json.loads((tmp_path / "rl" / "results.json").read_text())
     for name in ("ppo", "recurrent_ppo", "shipped_kkl", "oracle"):
-        assert set(res[name]) == {"availability", "mean_return", "train_seconds",
-                                  "env_steps"}, name
+        assert set(res[name]) == {"availability", "availability_steady", "mean_return",
+                                  "train_seconds", "env_steps"}, name
         assert 0.0 <= res[name]["availability"] <= 1.0
         assert 0.0 <= res[name]["mean_return"] <= 1000.0
     assert res["ppo"]["env_steps"] == 4096 and res["ppo"]["train_seconds"] > 0
