@@ -9,7 +9,8 @@ id                          what it is
 
 from gymnasium.envs.registration import register, registry
 
-from .link_align import EstimatorObservation, LinkAlignEnv, ShippedAlignmentPolicy
+from .link_align import LinkAlignEnv
+from .policy import EstimatorObservation, ShippedAlignmentPolicy
 
 ENV_ID = "ledsim/LinkAlign-v0"
 if ENV_ID not in registry:

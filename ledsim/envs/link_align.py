@@ -48,14 +48,12 @@ from gymnasium.utils import EzPickle
 
 from ..config import LinkConstants
 from ..control import intensity_maximum
-from ..loop.closed_loop import control_step, identified_model, run_supervisor, start_world
+from ..loop.closed_loop import start_world
 from ..loop.config import RunConfig, TaskPart, WorldPart
-from ..loop.gate import DropoutGate
 from ..optics import IMPOSSIBLE_SIGMAS, achievable_power, peak_power, receiver_response
 from ..physics.sensor import SensorReading
 from ..physics.system import GimbalSystem
 from ..physics.tick import advance
-from ..step import GimbalMotor
 
 #: The closest the receiver can come to the LED [m] (their housings touch): the
 #: observation space's upper bound is the power there.
@@ -203,118 +201,10 @@ class LinkAlignEnv(gym.Env, EzPickle):
             self._recorder = None
 
 
-def torque_action(torque: float, limit: float) -> float:
-    """The action in [-1, 1] whose ``action * limit`` is ``torque`` [N m] to the last
-    bit where one exists (so the environment applies what ``ledsim run`` applies)."""
-    a = torque / limit
-    for cand in (a, np.nextafter(a, np.inf), np.nextafter(a, -np.inf)):
-        if float(cand) * limit == torque:
-            a = float(cand)
-            break
-    return min(max(a, -1.0), 1.0)
+def __getattr__(name: str):
+    """The shipped policy and the estimator wrapper under this module's older names."""
+    if name in ("ShippedAlignmentPolicy", "EstimatorObservation", "torque_action"):
+        from . import policy
 
-
-class ShippedAlignmentPolicy:
-    """``ledsim run``'s stack as a policy on :class:`LinkAlignEnv`: the dropout gate, the
-    estimator under link supervision (the KKL bank, acquisition scans), the scenario's
-    control law and the warm-up hold, through the same
-    :class:`~ledsim.step.ControlStep`. ``action = policy(observation)``; it starts
-    afresh with each episode of the environment.
-
-    Args:
-        env: the (unwrapped) environment.
-        estimator: ``kkl``, ``ekf``, ``ukf``, ``pf`` or ``oracle``.
-    """
-
-    def __init__(self, env: LinkAlignEnv, estimator: str = "kkl"):
-        self.env = env.unwrapped if hasattr(env, "unwrapped") else env
-        self.cfg = replace(self.env.cfg, estimator=estimator)
-        self.cfg.validate()
-        self.step = None
-        self._episode = None
-
-    def _truth(self) -> np.ndarray:
-        r = self.env.reading
-        return np.array([r.phi, r.phidot])
-
-    def reset(self) -> None:
-        """Start afresh at the next call (the policy also does so by itself when the
-        environment starts a new episode)."""
-        self._episode = None
-
-    def _start(self) -> None:
-        env = self.env
-        # Fitted on a world of its own: fitting sets and steps MuJoCo's state.
-        model = identified_model(GimbalSystem(env.system.config))
-        self.step = control_step(self.cfg, env.system, model, env.run_seed,
-                                 env.start_gimbal_angle, self._truth)
-        self._episode = env.episode
-
-    @property
-    def lost(self) -> bool:
-        """The supervisor does not trust the estimate (last step)."""
-        return bool(self.step is not None and self.step.decision.lost)
-
-    def __call__(self, obs) -> np.ndarray:
-        env = self.env
-        if self._episode != env.episode:
-            self._start()
-        r = env.reading
-        torque = self.step(np.asarray(obs, dtype=float)[:2], env.k * env.dt,
-                           r.gimbal_angle, r.gimbal_rate)
-        return np.array([torque_action(torque, env.torque_limit)])
-
-
-class EstimatorObservation(gym.ObservationWrapper):
-    """Adds an estimator's output to the observation: (P1 [W], P2 [W], phi_hat [rad],
-    phidot_hat [rad/s]), and with ``lost_flag`` a fifth entry, 1.0 when the link
-    supervisor of ``ledsim run`` does not trust the estimate, else 0.0. The estimator
-    runs behind the same dropout gate and supervisor as in ``ledsim run`` (without the
-    acquisition scan: the agent has the motor), and is told the acceleration the
-    agent's torque commands each step."""
-
-    def __init__(self, env, estimator: str = "kkl", lost_flag: bool = False):
-        super().__init__(env)
-        base = env.unwrapped
-        self.cfg = replace(base.cfg, estimator=estimator)
-        self.cfg.validate()
-        self.lost_flag = lost_flag
-        low, high = env.observation_space.low, env.observation_space.high
-        dom = np.array([np.inf, np.inf])  # the estimate: unbounded (NaN-free)
-        low, high = np.r_[low, -dom], np.r_[high, dom]
-        if lost_flag:
-            low, high = np.r_[low, 0.0], np.r_[high, 1.0]
-        self.observation_space = spaces.Box(low, high, dtype=np.float64)
-        self.supervisor = None
-        self.decision = None
-
-    @property
-    def lost(self) -> bool:
-        return bool(self.decision is not None and self.decision.lost)
-
-    def reset(self, **kw):
-        obs, info = self.env.reset(**kw)
-        base = self.env.unwrapped
-        model = identified_model(GimbalSystem(base.system.config))
-        self.gate = DropoutGate(base.system.constants)
-        self.motor = GimbalMotor(base.system.inertia)
-        self.supervisor = run_supervisor(
-            self.cfg, base.system, model, base.run_seed,
-            lambda: np.array([base.reading.phi, base.reading.phidot]), reacquire=False)
-        return self.observation(obs), info
-
-    def step(self, action):
-        base = self.env.unwrapped
-        a = min(max(float(np.asarray(action, dtype=float).reshape(-1)[0]), -1.0), 1.0)
-        self.supervisor.predict(self.motor.acceleration(a * base.torque_limit))
-        return super().step(action)
-
-    def observation(self, obs):
-        base = self.env.unwrapped
-        r = base.reading
-        self.decision = self.supervisor.step(base.k * base.dt, self.gate(obs[:2]),
-                                             r.gimbal_angle, r.gimbal_rate)
-        parts = [obs, self.decision.xhat]
-        if self.lost_flag:
-            parts.append([float(self.decision.lost)])
-        return np.concatenate(parts)
+        return getattr(policy, name)
+    raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
