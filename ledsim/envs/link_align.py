@@ -200,11 +200,3 @@ class LinkAlignEnv(gym.Env, EzPickle):
             self._recorder.close()
             self._recorder = None
 
-
-def __getattr__(name: str):
-    """The shipped policy and the estimator wrapper under this module's older names."""
-    if name in ("ShippedAlignmentPolicy", "EstimatorObservation", "torque_action"):
-        from . import policy
-
-        return getattr(policy, name)
-    raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
