@@ -140,3 +140,14 @@ def test_the_env_pickles_as_its_arguments():
     a, _ = env.reset(seed=3)
     b, _ = copy.reset(seed=3)
     np.testing.assert_array_equal(a, b)
+
+
+def test_the_estimator_wrapper_passes_gymnasiums_checker():
+    import warnings
+
+    env = EstimatorObservation(gym.make(ENV_ID), estimator="ekf", lost_flag=True)
+    with warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("always")
+        check_env(env, skip_render_check=True)
+    assert not [w for w in caught if "infinity" in str(w.message)]
+    env.close()

@@ -78,23 +78,30 @@ class ShippedAlignmentPolicy:
         return np.array([torque_action(torque, env.torque_limit)])
 
 
-class EstimatorObservation(gym.ObservationWrapper):
+#: The estimate's part of the observation is clipped to this (phi [rad], phidot [rad/s]):
+#: beyond any angle or rate the gimbal reaches (the largest kick is 50 rad/s).
+ESTIMATE_BOUND = np.array([np.pi, 100.0])
+
+
+class EstimatorObservation(gym.ObservationWrapper, gym.utils.RecordConstructorArgs):
     """Adds an estimator's output to the observation: (P1 [W], P2 [W], phi_hat [rad],
-    phidot_hat [rad/s]), and with ``lost_flag`` a fifth entry, 1.0 when the link
-    supervisor of ``ledsim run`` does not trust the estimate, else 0.0. The estimator
+    phidot_hat [rad/s], the estimate clipped to :data:`ESTIMATE_BOUND`), and with
+    ``lost_flag`` a fifth entry, 1.0 when the link supervisor of ``ledsim run`` does not
+    trust the estimate, else 0.0. The estimator
     runs behind the same dropout gate and supervisor as in ``ledsim run`` (without the
     acquisition scan: the agent has the motor), and is told the acceleration the
     agent's torque commands each step."""
 
     def __init__(self, env, estimator: str = "kkl", lost_flag: bool = False):
-        super().__init__(env)
+        gym.utils.RecordConstructorArgs.__init__(self, estimator=estimator,
+                                                 lost_flag=lost_flag)
+        gym.ObservationWrapper.__init__(self, env)
         base = env.unwrapped
         self.cfg = replace(base.cfg, estimator=estimator)
         self.cfg.validate()
         self.lost_flag = lost_flag
         low, high = env.observation_space.low, env.observation_space.high
-        dom = np.array([np.inf, np.inf])  # the estimate: unbounded (NaN-free)
-        low, high = np.r_[low, -dom], np.r_[high, dom]
+        low, high = np.r_[low, -ESTIMATE_BOUND], np.r_[high, ESTIMATE_BOUND]
         if lost_flag:
             low, high = np.r_[low, 0.0], np.r_[high, 1.0]
         self.observation_space = spaces.Box(low, high, dtype=np.float64)
@@ -105,8 +112,8 @@ class EstimatorObservation(gym.ObservationWrapper):
     def lost(self) -> bool:
         return bool(self.decision is not None and self.decision.lost)
 
-    def reset(self, **kw):
-        obs, info = self.env.reset(**kw)
+    def reset(self, *, seed: int | None = None, options: dict | None = None):
+        obs, info = self.env.reset(seed=seed, options=options)
         base = self.env.unwrapped
         model = identified_model(GimbalSystem(base.system.config))
         self.gate = DropoutGate(base.system.constants)
@@ -127,7 +134,7 @@ class EstimatorObservation(gym.ObservationWrapper):
         r = base.reading
         self.decision = self.supervisor.step(base.k * base.dt, self.gate(obs[:2]),
                                              r.gimbal_angle, r.gimbal_rate)
-        parts = [obs, self.decision.xhat]
+        parts = [obs, np.clip(self.decision.xhat, -ESTIMATE_BOUND, ESTIMATE_BOUND)]
         if self.lost_flag:
             parts.append([float(self.decision.lost)])
         return np.concatenate(parts)
