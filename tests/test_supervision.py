@@ -209,3 +209,14 @@ def test_converging_from_the_initial_guess_is_not_a_lost_link():
     out = _run(estimator="kkl")
     assert out.metrics.link_events == []
     assert not out.trace.lost.any()
+
+
+def test_a_fast_kick_is_flagged_at_once_and_recovered():
+    # 12 rad/s spins the receiver off the beam: the gate holds the dark samples as a
+    # dropout, but the encoder travels while blind, which no occlusion does (it was
+    # flagged after 0.7-1.9 s, and half the seeds never came back).
+    out = _run(estimator="kkl", disturbances=("kick:start=6,rate=12",), seconds=10.0)
+    events = out.metrics.link_events
+    assert out.metrics.detection_delay is not None and out.metrics.detection_delay <= 0.2
+    assert events and events[0][1] is not None  # recovered
+    assert out.metrics.recovery_time is not None

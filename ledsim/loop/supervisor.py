@@ -35,6 +35,12 @@ def model_gain(model, constants: LinkConstants) -> float:
     return float(np.sum(h * g) / np.sum(g * g))
 
 
+#: Encoder travel [rad] since the last trusted step, while every photodiode is gated
+#: out, that an occlusion cannot explain: the receiver itself turned off the beam (a
+#: kick), so the link is lost now, not when the dropout gate gives up (1 s later).
+BLIND_TRAVEL = 0.2
+
+
 class LinkSupervisor:
     """Gain normalisation, loss detection, acquisition scan and re-seeding for one run.
 
@@ -86,9 +92,14 @@ class LinkSupervisor:
         y_model = self.gain.normalize(y)
         xhat = est.update(y_model)
         lost = self.monitor.update(y_model, xhat)
+        blind = not np.isfinite(y).any()
+        turned = blind and bool(self.trusted_q) and \
+            abs(q - self.trusted_q[-1]) > BLIND_TRAVEL
+        lost = lost or turned
         scan.record(y, q)
         if not (lost or scan.active):
-            self.trusted_q.append(q)
+            if not blind:  # only angles the beam confirmed: a spun gimbal's are not
+                self.trusted_q.append(q)
             self.gain.update(y, self.monitor.noise_std * self.gain.ratio)
             if isinstance(est, ObserverBank):
                 # The member trained for the noise the rescaled powers now carry.
@@ -97,8 +108,9 @@ class LinkSupervisor:
             return Decision(xhat, False)
         if t < self.warmup:  # still converging from the initial guess: not a lost link
             return Decision(xhat, False, reason="converging")
+        reason = "turned off the beam while blind" if turned else self.monitor.reason
         if not self.reacquire:
-            return Decision(xhat, True, reason=self.monitor.reason)
+            return Decision(xhat, True, reason=reason)
         # Lost: re-seed from the last samples if they show the beam (no need to move),
         # else scan until they do.
         noise = float(np.mean(self.monitor.noise_std)) * self.gain.ratio
