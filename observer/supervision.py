@@ -40,11 +40,16 @@ class ResidualMonitor:
         model_error: relative error of ``h`` itself (a bias the average does not remove:
             the hull's motion changes the transmitter gain h assumes) [-].
         noise_ratio: the initial noise level over the system's nominal one [-].
+        dark_sigmas, dark_time: no light is seen when the brightest usable power,
+            averaged over the last ``dark_time`` [s], is within ``dark_sigmas`` standard
+            deviations of that average's noise of zero (averaging lets a weak but steady
+            link, a few noise levels bright, count as light).
     """
 
     def __init__(self, system: DiscreteSystem, tau: float = 0.1, threshold: float = 25.0,
                  domain_margin: float = 0.2, noise_tau: float = 1.0,
-                 model_error: float = 0.1, noise_ratio: float = 1.0):
+                 model_error: float = 0.1, noise_ratio: float = 1.0,
+                 dark_sigmas: float = 3.0, dark_time: float = 0.2):
         self.system = system
         self.alpha = min(1.0, system.Te / tau)
         self.noise_alpha = min(1.0, system.Te / noise_tau)
@@ -57,6 +62,8 @@ class ResidualMonitor:
         self.sigma0 = np.asarray(system.measurement_noise_std, dtype=float)
         self._noise_floor = (0.25 * self.sigma0**2).tolist()
         self.noise_ratio = noise_ratio
+        self.dark_sigmas = dark_sigmas
+        self.dark_steps = max(1, int(round(dark_time / system.Te)))
         self.reset()
 
     def reset(self) -> None:
@@ -65,6 +72,7 @@ class ResidualMonitor:
         self.statistic = 0.0
         self.lost = False
         self.reason = ""
+        self._bright: list[float] = []  # the brightest usable power of recent steps
         if not hasattr(self, "_noise_var"):
             self.noise_var = self.sigma0**2 * self.noise_ratio**2
             self._y_prev = None
@@ -120,7 +128,20 @@ class ResidualMonitor:
         self.statistic = statistic
         if self.statistic > self.threshold:
             return self._flag(True, "output residual above the noise")
+        if self._no_light(y, ok):
+            return self._flag(True, "no light")
         return self._flag(False, "")
+
+    def _no_light(self, y: list, ok: list) -> bool:
+        """The brightest usable power, averaged over the last ``dark_time``, is within
+        ``dark_sigmas`` of its noise of zero."""
+        bright = self._bright
+        bright.append(max(v for v, o in zip(y, ok, strict=True) if o))
+        if len(bright) > self.dark_steps:
+            del bright[0]
+        n = len(bright)
+        return n == self.dark_steps and sum(bright) / n <= \
+            self.dark_sigmas * math.sqrt(max(self._noise_var) / n)
 
     @property
     def mean_residual(self) -> np.ndarray:

@@ -220,3 +220,39 @@ def test_a_fast_kick_is_flagged_at_once_and_recovered():
     assert out.metrics.detection_delay is not None and out.metrics.detection_delay <= 0.2
     assert events and events[0][1] is not None  # recovered
     assert out.metrics.recovery_time is not None
+
+
+def test_the_gate_holds_a_dropout_then_passes_a_blackout_on():
+    from ledsim.loop.gate import DropoutGate
+
+    gate = DropoutGate(C, max_hold=0.5)  # 50 steps of 10 ms
+    lit, dark = np.array([1.0, 0.9]), np.array([0.0, 0.0])
+    for _ in range(20):
+        gate(lit)
+    out = np.array([gate(dark) for _ in range(200)])
+    assert np.isnan(out[:50]).all()  # a dropout: held
+    assert np.isfinite(out[50:]).all()  # then every dark sample passes (not 1 a second)
+    assert np.isfinite(gate(lit)).all()  # light returns
+    for _ in range(20):
+        gate(lit)
+    assert np.isnan(gate(dark)).all()  # and a new darkness, once lit again, is a dropout
+    forever = DropoutGate(C, max_hold=float("inf"))
+    for _ in range(20):
+        forever(lit)
+    assert np.isnan([forever(dark) for _ in range(500)]).all()
+
+
+def test_the_monitor_sees_no_light_but_a_weak_steady_link_as_light(model):
+    rng = np.random.default_rng(2)
+    sigma = model.measurement_noise_std
+    mon = ResidualMonitor(model)
+    dark = [mon._no_light(list(sigma * rng.standard_normal(2)), [True, True])
+            for _ in range(mon.dark_steps)]
+    assert dark[-1] and not any(dark[:-1])  # after dark_time (0.2 s) of darkness
+    # A weak but steady link, two noise levels bright at its brighter photodiode.
+    weak = ResidualMonitor(model)
+    y = model.h(np.zeros(2))
+    y = y * (2 * sigma / y.max())
+    seen = [weak._no_light(list(y + sigma * rng.standard_normal(2)), [True, True])
+            for _ in range(500)]
+    assert not any(seen)

@@ -12,6 +12,7 @@ estimator.
 
 from __future__ import annotations
 
+import math
 import sys
 import time
 from collections.abc import Callable, Sequence
@@ -89,7 +90,11 @@ def control_step(cfg: RunConfig, system: GimbalSystem, model, seed: int, q_hold:
     scenario's law, and the gimbal motor holding ``q_hold`` [rad] during the warm-up."""
     spec = cfg.scenario_spec
     supervisor = run_supervisor(cfg, system, model, seed, truth, spec.law.tracks_beam)
-    return ControlStep(DropoutGate(system.constants), supervisor, spec.law,
+    # Past max_hold the gate passes a lasting darkness on, for the supervisor to see as
+    # a blackout; an estimator alone cannot read darkness, so without supervision the
+    # gate holds every dark sample.
+    hold = {} if isinstance(supervisor, LinkSupervisor) else {"max_hold": math.inf}
+    return ControlStep(DropoutGate(system.constants, **hold), supervisor, spec.law,
                        system.constants, GimbalMotor(system.inertia, q_hold), spec.warmup)
 
 

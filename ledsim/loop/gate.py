@@ -29,19 +29,20 @@ class DropoutGate:
     Args:
         constants: link constants (the floor defaults to 10% of the peak power).
         floor: power below which a sample may be a dropout [W].
-        max_hold: longest dropout bridged [s].
+        max_hold: longest dropout bridged [s] (inf: every one).
         smoothing: weight of a new sample in the recent level [-].
     """
 
     def __init__(self, constants: LinkConstants, floor: float | None = None,
                  max_hold: float = 1.0, smoothing: float = 0.2):
         self.floor = 0.1 * peak_power(constants) if floor is None else floor
-        self.max_steps = int(round(max_hold / constants.Te))
+        self.max_steps = math.inf if math.isinf(max_hold) else int(round(max_hold / constants.Te))
         self.smoothing = smoothing
         self.reset()
 
     def reset(self) -> None:
         self._held = [0, 0]
+        self._expired = [False, False]  # held too long: passing the darkness on
         self._level: list | None = None
 
     @property
@@ -63,7 +64,10 @@ class DropoutGate:
         for i, yi in enumerate(y):
             held, level = self._held[i], self._level[i]
             low = yi < floor
-            drop = low and (held > 0 or level > 2 * floor) and held < self.max_steps
+            # Past max_hold a lasting darkness is passed on, every sample, until light
+            # returns: the estimators and the supervisor see a blackout as one.
+            self._expired[i] = low and (self._expired[i] or held >= self.max_steps)
+            drop = low and (held > 0 or level > 2 * floor) and not self._expired[i]
             self._held[i] = held + 1 if drop else 0
             if not drop:
                 self._level[i] = (1 - a) * level + a * yi
