@@ -279,3 +279,16 @@ def test_outputs_follow_the_umask(tmp_path):
     assert stat.S_IMODE((tmp_path / "o").stat().st_mode) == 0o755
     for f in (tmp_path / "o").iterdir():
         assert stat.S_IMODE(f.stat().st_mode) == 0o644, f
+
+
+def test_a_distance_the_shipped_kkl_does_not_serve_is_warned_about_and_flagged(tmp_path):
+    r = run_cli("run", "--distance", "0.33", "--seeds", "1", "--seconds", "1", "--workers",
+                "1", "--no-plot", "--out", str(tmp_path / "far"))
+    assert r.returncode == 0, r.stderr
+    assert "outside the 0.05-0.3 m" in r.stderr
+    assert json.loads((tmp_path / "far" / "results.json").read_text())[
+        "distance_served"] is False
+    r = run_cli("run", "--distance", "0.2", "--seeds", "1", "--seconds", "1", "--workers",
+                "1", "--no-plot", "-q", "--out", str(tmp_path / "near"))
+    assert r.returncode == 0 and "outside" not in r.stderr
+    assert json.loads((tmp_path / "near" / "results.json").read_text())["distance_served"]

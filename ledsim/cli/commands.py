@@ -35,6 +35,17 @@ def _loop_config(args, **given):
     return cfg
 
 
+def _warn_unserved(cfg) -> None:
+    """Say so when the shipped KKL runs at a distance it is not measured to serve."""
+    from ..loop.estimation import SERVED_DISTANCES, served
+
+    if not served(cfg):
+        lo, hi = SERVED_DISTANCES
+        log.warning(f"--distance {cfg.distance:g} is outside the {lo:g}-{hi:g} m the shipped "
+                    "KKL is measured to serve: its results are not vouched for "
+                    "(results.json: distance_served false)")
+
+
 def simulate(args) -> int:
     from ..config import LinkConstants
     from ..physics.disturbances import check_timing, parse_disturbance
@@ -81,6 +92,7 @@ def run(args) -> int:
 
     cfg = _loop_config(args)
     out = check_out_dir(args.out)
+    _warn_unserved(cfg)
     if cfg.steady_from < cfg.scenario_spec.steady_from:
         log.info(f"a {cfg.run_seconds:g} s run is shorter than the steady-state window "
                  f"(from {cfg.scenario_spec.steady_from:g} s): RMSE over its second half, "

@@ -30,6 +30,16 @@ REFERENCE_DISTANCE = PAPER_DISTANCE
 #: Rescaled to the reference gain, the nominal noise is about 6x at d = 0.2 m and 13x at
 #: 0.3 m; the slower filters of the low-light preset pay off only on the weakest link.
 BANK = ((1.0, "default"), (3.0, "default"), (6.0, "default"), (13.0, "low-light"))
+#: Link distances [m] the shipped bank is measured to serve (``docs/disturbances.md``).
+SERVED_DISTANCES = (0.05, 0.3)
+
+
+def served(cfg: RunConfig) -> bool:
+    """Whether the run's KKL is the shipped bank at a distance it is measured to serve
+    (True for every other estimator, and for a KKL of the user's own checkpoint)."""
+    lo, hi = SERVED_DISTANCES
+    bank = cfg.estimator == "kkl" and cfg.supervision and not cfg.checkpoint
+    return not bank or lo <= cfg.distance <= hi
 BANK_NOISE = tuple(s for s, _ in BANK)
 
 

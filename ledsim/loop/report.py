@@ -17,6 +17,7 @@ from ..outputs import atomic_write_bytes
 from ..results import DictAccess, write_json
 from .closed_loop import RunOutcome, Trace, check_checkpoint, run_batch
 from .config import RunConfig
+from .estimation import served
 
 
 @dataclass
@@ -69,6 +70,7 @@ class RunSummary(DictAccess):
     throughput_bps: Stat
     fec_share: Stat
     bit_rate: float
+    distance_served: bool
     link_events: list
     supervision: bool
     us_per_step: Stat
@@ -98,6 +100,7 @@ def summarize(cfg: RunConfig, outs: list[RunOutcome]) -> RunSummary:
         throughput_bps=stat(lambda o: o.metrics.throughput_bps),
         fec_share=stat(lambda o: o.metrics.fec_share),
         bit_rate=BIT_RATE,
+        distance_served=served(cfg),
         link_events=[{"seed": k, "lost_recovered": o.metrics.link_events}
                      for k, o in enumerate(outs)],
         supervision=cfg.supervision,
