@@ -8,6 +8,7 @@ import pytest
 from conftest import run_cli
 
 from ledsim.config import LinkConstants
+from ledsim.errors import LedsimError
 from ledsim.loop.acquisition import fit_incidence_angle
 from ledsim.loop.config import RunConfig
 from ledsim.loop.metrics import link_events
@@ -256,3 +257,13 @@ def test_the_monitor_sees_no_light_but_a_weak_steady_link_as_light(model):
     seen = [weak._no_light(list(y + sigma * rng.standard_normal(2)), [True, True])
             for _ in range(500)]
     assert not any(seen)
+
+
+def test_filters_with_the_kkls_knowledge_of_the_distance_hold_a_far_link():
+    # --filter-distance nominal: the 0.085 m model and the supervisor's gain tracker.
+    out = _run(estimator="ekf", distance=0.2, filter_distance="nominal")
+    assert out.metrics.availability > 0.8 and out.metrics.rmse_steady["x1"] < 0.02
+    with pytest.raises(LedsimError, match="--filter-distance nominal"):
+        RunConfig(estimator="ekf", filter_distance="nominal", supervision=False).validate()
+    with pytest.raises(LedsimError, match="filter-distance"):
+        RunConfig(filter_distance="guess").validate()

@@ -82,6 +82,11 @@ def _add_loop_args(p) -> None:
     p.add_argument("--disturbance", action="append", default=[], metavar="SPEC",
                    help="name[:key=value,...] with name in " + ", ".join(DISTURBANCES)
                    + " (repeatable)")
+    p.add_argument("--filter-distance", default=EstimatorPart.filter_distance,
+                   **_choices(("configured", "nominal")),
+                   help="what the EKF, UKF and PF know of the distance: the configured "
+                   "one's model, or the nominal 0.085 m model plus the supervisor's gain "
+                   "tracker (what the KKL knows)")
     p.add_argument("--no-supervision", action="store_true",
                    help="no loss detection, gain tracking or reacquisition scan: the "
                    "estimator alone drives the motor (and the KKL is the shipped one of "

@@ -61,11 +61,14 @@ def start_world(cfg: RunConfig, system: GimbalSystem, world: LinkWorld, seed: in
 def make_supervisor(cfg: RunConfig, system: GimbalSystem, estimator, estimator_system,
                     reacquire: bool) -> LinkSupervisor:
     """The supervisor of one run: its gain prior is the configured distance's over the
-    estimator model's, and its noise prior the noise in the model's gain (for a bank)."""
+    estimator model's, and its noise prior the noise in the model's gain over the noise
+    that model already carries (for a bank: its nominal noise)."""
     prior = peak_power(system.constants) / peak_power(estimator_system.constants)
+    carried = (estimator_system.constants.measurement_noise_std
+               / system.constants.measurement_noise_std)
     return LinkSupervisor(estimator, system.constants, system.inertia,
                           warmup=cfg.scenario_spec.warmup, reacquire=reacquire,
-                          gain_ratio=prior, noise_ratio=cfg.noise_scale / prior)
+                          gain_ratio=prior, noise_ratio=cfg.noise_scale / prior / carried)
 
 
 def run_supervisor(cfg: RunConfig, system: GimbalSystem, model, seed: int,

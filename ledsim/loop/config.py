@@ -41,6 +41,7 @@ PHYSICS_SCENARIOS = {
 #: closed-form model only).
 LOOP_ESTIMATORS = tuple(n for n in ESTIMATORS if n not in ("kkl-paper", "kkl-handover"))
 OMEGA_MODELS = ("identified", "simulator", "none")
+FILTER_DISTANCES = ("configured", "nominal")
 
 
 @dataclass(frozen=True)
@@ -99,12 +100,17 @@ class EstimatorPart:
         checkpoint: KKL checkpoint (None: the shipped one for the distance).
         omega_model: f of the KKL's Omega correction: the identified one-step model,
             the simulator itself, or none.
+        filter_distance: what the EKF, UKF and particle filter know of the distance:
+            ``configured`` (their model is the configured distance's) or ``nominal``
+            (the paper distance's model, rescaled by the supervisor's gain tracker: what
+            the KKL knows).
     """
 
     estimator: str = "kkl"
     particles: int = 2000
     checkpoint: str | None = None
     omega_model: str = "identified"
+    filter_distance: str = "configured"
 
 
 @dataclass(frozen=True)
@@ -156,6 +162,7 @@ class RunConfig:
     scene: str | None = WorldPart.scene
     supervision: bool = TaskPart.supervision
     integrator: str = WorldPart.integrator
+    filter_distance: str = EstimatorPart.filter_distance
 
     @classmethod
     def of(cls, world: WorldPart = WorldPart(), task: TaskPart = TaskPart(),
@@ -173,10 +180,16 @@ class RunConfig:
     def validate(self) -> None:
         for flag, value, registry in (("scenario", self.scenario, PHYSICS_SCENARIOS),
                                       ("estimator", self.estimator, LOOP_ESTIMATORS),
-                                      ("--omega-model", self.omega_model, OMEGA_MODELS)):
+                                      ("--omega-model", self.omega_model, OMEGA_MODELS),
+                                      ("--filter-distance", self.filter_distance,
+                                       FILTER_DISTANCES)):
             if value not in registry:
                 raise LedsimError(f"unknown {flag.lstrip('-')} {value!r}: choose one of "
                                   f"{', '.join(registry)}")
+        if self.filter_distance == "nominal" and not self.supervision:
+            raise LedsimError("--filter-distance nominal is not allowed with "
+                              "--no-supervision: the filters then need the supervisor's "
+                              "gain tracker")
         checks = [("--distance", self.distance, self.distance > 0, "> 0 m"),
                   ("--torque-limit", self.torque_limit, self.torque_limit > 0, "> 0 N m"),
                   ("--seeds", self.seeds, self.seeds >= 1, ">= 1"),

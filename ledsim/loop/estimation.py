@@ -19,6 +19,7 @@ from observer.bank import ObserverBank
 
 from ..config import PAPER_DISTANCE
 from ..estimators import build_estimator
+from ..optics import peak_power
 from ..physics.scene import WorldConfig
 from ..physics.system import GimbalSystem, IdentifiedGimbalModel
 from ..resources import require_shipped_checkpoint
@@ -116,6 +117,14 @@ def loop_estimator(cfg: RunConfig, system: GimbalSystem, model: IdentifiedGimbal
     """(estimator, the system whose gain its model has) for a run in ``system``'s world;
     the estimator is None for the oracle."""
     if cfg.estimator != "kkl":
+        if cfg.filter_distance == "nominal":
+            # What the KKL knows: the reference distance's model, and the supervisor's
+            # gain tracker for the rest; the sensor's noise, rescaled to the model's gain
+            # by the distance's prior (as the KKL bank picks its member).
+            ref = cfg.world_config(distance=REFERENCE_DISTANCE)
+            prior = peak_power(system.constants) / peak_power(ref.constants)
+            system = member_system(noisier(ref, cfg.noise_scale / prior))
+            model = identified_model(system)
         # Under supervision a loss is the supervisor's to handle, for every estimator
         # alike: the particle filter's own re-draw fired on half-occluded samples and kicks.
         est = build_estimator(cfg.estimator, system, model=model, particles=cfg.particles,

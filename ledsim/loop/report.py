@@ -71,6 +71,7 @@ class RunSummary(DictAccess):
     fec_share: Stat
     bit_rate: float
     distance_served: bool
+    filter_distance: str
     link_events: list
     supervision: bool
     us_per_step: Stat
@@ -101,6 +102,7 @@ def summarize(cfg: RunConfig, outs: list[RunOutcome]) -> RunSummary:
         fec_share=stat(lambda o: o.metrics.fec_share),
         bit_rate=BIT_RATE,
         distance_served=served(cfg),
+        filter_distance=cfg.filter_distance,
         link_events=[{"seed": k, "lost_recovered": o.metrics.link_events}
                      for k, o in enumerate(outs)],
         supervision=cfg.supervision,
