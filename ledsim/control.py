@@ -39,6 +39,13 @@ def intensity_maximum(constants: LinkConstants) -> float:
     return float(phi[np.argmax(receiver_response(phi, constants.receiver))])
 
 
+@functools.lru_cache(maxsize=64)
+def receiver_peak(constants: LinkConstants) -> float:
+    """g at the intensity maximum: photodiode 1's best response [-] (what the achievable
+    power multiplies the transmitter gain by)."""
+    return float(receiver_response(intensity_maximum(constants), constants.receiver))
+
+
 @dataclass
 class Excitation:
     """Open-loop input cos_amp cos(w t) + sin_amp sin(w t) [rad/s^2] (IF1, IF2).

@@ -47,10 +47,10 @@ from gymnasium import spaces
 from gymnasium.utils import EzPickle
 
 from ..config import LinkConstants
-from ..control import intensity_maximum
+from ..control import receiver_peak
 from ..loop.closed_loop import start_world
 from ..loop.config import RunConfig, TaskPart, WorldPart
-from ..optics import IMPOSSIBLE_SIGMAS, achievable_power, peak_power, receiver_response
+from ..optics import IMPOSSIBLE_SIGMAS, achievable_power, peak_power
 from ..physics.sensor import SensorReading
 from ..physics.system import GimbalSystem
 from ..physics.tick import advance
@@ -120,7 +120,7 @@ class LinkAlignEnv(gym.Env, EzPickle):
         self.phi0_range = phi0_range
         c = self.system.constants
         self.peak = peak_power(c)
-        self.peak_response = float(receiver_response(intensity_maximum(c), c.receiver))
+        self.peak_response = receiver_peak(c)
         margin = IMPOSSIBLE_SIGMAS * c.measurement_noise_std * self.cfg.noise_scale
         closest = float(achievable_power(MIN_DISTANCE, 0.0, c, self.peak_response))
         self.render_mode = render_mode

@@ -9,9 +9,8 @@ import gymnasium as gym
 import numpy as np
 from gymnasium import spaces
 
-from ..loop.closed_loop import control_step, identified_model, run_supervisor
-from ..loop.gate import DropoutGate
-from ..physics.system import GimbalSystem
+from ..loop.closed_loop import control_step, dropout_gate, run_supervisor
+from ..loop.estimation import identified_model_of
 from ..step import GimbalMotor
 from .link_align import LinkAlignEnv
 
@@ -46,10 +45,6 @@ class ShippedAlignmentPolicy:
         self.step = None
         self._episode = None
 
-    def _truth(self) -> np.ndarray:
-        r = self.env.reading
-        return np.array([r.phi, r.phidot])
-
     def reset(self) -> None:
         """Start afresh at the next call (the policy also does so by itself when the
         environment starts a new episode)."""
@@ -57,10 +52,9 @@ class ShippedAlignmentPolicy:
 
     def _start(self) -> None:
         env = self.env
-        # Fitted on a world of its own: fitting sets and steps MuJoCo's state.
-        model = identified_model(GimbalSystem(env.system.config))
+        model = identified_model_of(env.system.config)
         self.step = control_step(self.cfg, env.system, model, env.run_seed,
-                                 env.start_gimbal_angle, self._truth)
+                                 env.start_gimbal_angle, lambda: env.reading.x)
         self._episode = env.episode
 
     @property
@@ -115,12 +109,11 @@ class EstimatorObservation(gym.ObservationWrapper, gym.utils.RecordConstructorAr
     def reset(self, *, seed: int | None = None, options: dict | None = None):
         obs, info = self.env.reset(seed=seed, options=options)
         base = self.env.unwrapped
-        model = identified_model(GimbalSystem(base.system.config))
-        self.gate = DropoutGate(base.system.constants)
+        model = identified_model_of(base.system.config)
         self.motor = GimbalMotor(base.system.inertia)
-        self.supervisor = run_supervisor(
-            self.cfg, base.system, model, base.run_seed,
-            lambda: np.array([base.reading.phi, base.reading.phidot]), reacquire=False)
+        self.supervisor = run_supervisor(self.cfg, base.system, model, base.run_seed,
+                                         lambda: base.reading.x, reacquire=False)
+        self.gate = dropout_gate(base.system.constants, self.supervisor)
         return self.observation(obs), info
 
     def step(self, action):

@@ -93,12 +93,16 @@ def control_step(cfg: RunConfig, system: GimbalSystem, model, seed: int, q_hold:
     scenario's law, and the gimbal motor holding ``q_hold`` [rad] during the warm-up."""
     spec = cfg.scenario_spec
     supervisor = run_supervisor(cfg, system, model, seed, truth, spec.law.tracks_beam)
-    # Past max_hold the gate passes a lasting darkness on, for the supervisor to see as
-    # a blackout; an estimator alone cannot read darkness, so without supervision the
-    # gate holds every dark sample.
-    hold = {} if isinstance(supervisor, LinkSupervisor) else {"max_hold": math.inf}
-    return ControlStep(DropoutGate(system.constants, **hold), supervisor, spec.law,
+    return ControlStep(dropout_gate(system.constants, supervisor), supervisor, spec.law,
                        system.constants, GimbalMotor(system.inertia, q_hold), spec.warmup)
+
+
+def dropout_gate(constants, supervisor) -> DropoutGate:
+    """The gate in front of ``supervisor``. Past max_hold it passes a lasting darkness
+    on, for a link supervisor to see as a blackout; an estimator alone cannot read
+    darkness, so without supervision the gate holds every dark sample."""
+    hold = {} if isinstance(supervisor, LinkSupervisor) else {"max_hold": math.inf}
+    return DropoutGate(constants, **hold)
 
 
 class LoopRun:
@@ -111,7 +115,8 @@ class LoopRun:
         self.world = world
         self.sensor, self.disturbances = start_world(cfg, system, world, seed)
         self.reading: SensorReading | None = None
-        self.step = control_step(cfg, system, model, seed, world.gimbal_angle, self._truth)
+        self.step = control_step(cfg, system, model, seed, world.gimbal_angle,
+                                 lambda: self.reading.x)
         self.supervised = isinstance(self.step.supervisor, LinkSupervisor)
         self.geo = np.empty((steps, 4, 2))  # distance, theta, phi, visible fraction
         self.state = np.empty((steps, 2))
@@ -123,10 +128,6 @@ class LoopRun:
         self.xhat = np.empty((steps, 2))
         self.flags = np.zeros((steps, 2), dtype=bool)  # lost, acquiring
         self.spent = 0.0  # s in the control step
-
-    def _truth(self) -> np.ndarray:
-        r = self.reading
-        return np.array([r.phi, r.phidot])
 
     def control(self, k: int, t: float) -> float:
         """Read the sensor at step ``k`` (time ``t`` [s]), record it, and return the motor

@@ -59,6 +59,13 @@ def identified_model(system: GimbalSystem) -> IdentifiedGimbalModel:
     return _MODELS[key]
 
 
+def identified_model_of(world: WorldConfig) -> IdentifiedGimbalModel:
+    """:func:`identified_model` of ``world``, fitted on a system of its own (fitting sets
+    and steps MuJoCo's state), both built once per process: for code that steps a world
+    of its own (the environment's policy and wrapper)."""
+    return identified_model(member_system(world))
+
+
 _MEMBER_SYSTEMS: dict = {}
 
 

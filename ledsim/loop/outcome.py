@@ -7,8 +7,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from .. import optics
-from ..control import intensity_maximum
-from ..optics import receiver_response
+from ..control import receiver_peak
 from ..results import DictAccess
 from .config import RunConfig
 from .metrics import RunMetrics, run_metrics
@@ -61,8 +60,8 @@ class RunOutcome(DictAccess):
 def achievable_power(res, c) -> np.ndarray:
     """Most photodiode 1 could receive at each step of ``res`` [W]: the transmitter gain
     of that moment's distance and LED angle, times the receiver's peak response."""
-    g_max = float(receiver_response(intensity_maximum(c), c.receiver))
-    return optics.achievable_power(res.distance[:, 0], res.emission_angle[:, 0], c, g_max)
+    return optics.achievable_power(res.distance[:, 0], res.emission_angle[:, 0], c,
+                                   receiver_peak(c))
 
 
 def outcome(res, xhat: np.ndarray, flags: np.ndarray, cfg: RunConfig, constants,

@@ -57,6 +57,11 @@ class SensorReading:
     gimbal_rate: float
     hull_pos: np.ndarray
 
+    @property
+    def x(self) -> np.ndarray:
+        """The true state (phi [rad], phidot [rad/s]) of photodiode 1."""
+        return np.array([self.phi, self.phidot])
+
 
 class IrradianceSensor:
     """Two-photodiode power sensor on a :class:`LinkWorld`.
