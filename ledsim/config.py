@@ -154,6 +154,9 @@ class NavigationNoise:
         fix_noise: standard deviation of an acoustic position fix, each axis [m]: a short
             baseline or USBL fix at a few metres (about 1 % of the range).
         fix_rate: acoustic fixes per second [Hz].
+        depth_noise: standard deviation of the pressure sensor's depth [m]: 2 mm, the
+            0.2 mbar resolution of a Blue Robotics Bar30 (TE MS5837-30BA), read every
+            control step.
     """
 
     gyro_noise_density: float = math.radians(0.007)
@@ -167,10 +170,11 @@ class NavigationNoise:
     encoder_bits: int = 14
     fix_noise: float = 0.03
     fix_rate: float = 1.0
+    depth_noise: float = 0.002
 
     def __post_init__(self) -> None:
         for name in ("gyro_noise_density", "gyro_bias_instability", "accel_noise_density",
-                     "accel_bias_instability", "dvl_noise", "fix_noise"):
+                     "accel_bias_instability", "dvl_noise", "fix_noise", "depth_noise"):
             value = getattr(self, name)
             if not (math.isfinite(value) and value >= 0):
                 raise ConfigError(f"{name}={value!r} is not allowed: must be >= 0 and finite")

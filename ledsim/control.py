@@ -114,7 +114,7 @@ class AlignmentPID:
     ki: float = 36.0
     Te: float | None = None
     u_max: float = 200.0
-    i_max: float = 0.1
+    i_max: float = 3.0
     domain: tuple[float, float] = (0.5, 0.5)
 
     def __post_init__(self):
@@ -133,3 +133,9 @@ class AlignmentPID:
         self.integral = min(max(self.integral + r * self.Te, -self.i_max), self.i_max)
         u = -self.kv * r - self.ki * self.integral
         return min(max(u, -self.u_max), self.u_max)
+
+    def take_over(self, u: float) -> None:
+        """Start from the input ``u`` [rad/s^2] the motor gave so far (the warm-up hold's
+        torque against a steady load, such as the water on the gimbal housing): the
+        integral takes it over, so the hand-over does not drop the load."""
+        self.integral = min(max(-u / self.ki, -self.i_max), self.i_max)

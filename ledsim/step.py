@@ -16,12 +16,23 @@ paper's closed-form experiments. At step t:
    :class:`DirectInput` for the closed-form model), and the supervisor runs the
    estimator's ``predict`` with the u that command gives.
 
+With the vehicle's measurement of the line of sight (``los``, a
+:class:`~ledsim.physics.vehicle.LineOfSight`: the IMU, the DVL and the encoder), the
+step also stabilises the line of sight: the motor command carries the torque that
+turns the gimbal with the LED's bearing (feed-forward of its measured acceleration),
+the estimator's ``predict`` is told the input phi'' really gets (the hull's part plus
+the motor's, after the torque limit: a known input), and the supervisor, the scan and
+the warm-up hold see the encoder in the line of sight's frame (the encoder angle less
+the bearing the hull's motion turned), so the angle they remember still points at the
+LED after the hull has moved.
+
 The sensor reading (step 0) and the physics tick (after the step) belong to the world
 that runs the loop (:mod:`ledsim.physics.tick` in MuJoCo).
 """
 
 from __future__ import annotations
 
+import math
 from collections.abc import Callable
 from dataclasses import dataclass
 
@@ -78,10 +89,15 @@ class GimbalMotor:
     """
 
     def __init__(self, inertia: float, q_hold: float = 0.0,
-                 hold_gains: tuple[float, float] = (100.0, 20.0)):
+                 hold_gains: tuple[float, float] = (400.0, 40.0), limit: float = math.inf):
         self.inertia = inertia
         self.q_hold = q_hold
         self.hold_gains = hold_gains
+        self.limit = limit
+
+    def applied(self, torque: float) -> float:
+        """The torque the motor gives for a command [N m] (clipped at its limit)."""
+        return min(max(torque, -self.limit), self.limit)
 
     def torque(self, u: float) -> float:
         """Motor torque [N m] that commands angular acceleration ``u`` [rad/s^2] of phi."""
@@ -103,11 +119,56 @@ class DirectInput:
     def torque(self, u: float) -> float:
         return u
 
+    def applied(self, command: float) -> float:
+        return command
+
     def acceleration(self, torque: float) -> float:
         return torque
 
     def hold(self, q: float, qdot: float) -> float:
         return 0.0
+
+
+class LoadObserver:
+    """The input the gimbal gets that its model does not explain (the water's torque on
+    its housing in a current), from the encoder and the hull's gyro: a disturbance
+    observer in the model's own terms, so the drag the model already has is not
+    counted twice.
+
+    With the line of sight still, phidot = -w, w = qdot + r the gimbal's inertial rate
+    (encoder rate plus the hull's yaw rate; the hull's own turning does not move the
+    gimbal, which is free on its hinge). The model predicts the next phidot from the
+    input u the motor gave; what it misses, over the model's input gain, is the load d
+    [rad/s^2] (low-passed over ``time``). The motor cancels it, so a current on the
+    gimbal no longer waits for the slow integral of the rate loop.
+
+    Args:
+        model: the one-step model (``f(x, u)``, the identified MuJoCo model).
+        time: the low-pass time constant [s].
+        limit: the largest load it believes [rad/s^2] (60: 0.0125 N m on the shipped
+            gimbal, beyond the water's torque at 0.5 m/s); an impulse (a kick) is not a
+            load, and the loop must see it as a loss.
+    """
+
+    def __init__(self, model, time: float = 0.05, limit: float = 60.0):
+        self.model = model
+        self.limit = limit
+        self.gain = min(1.0, model.Te / time)
+        x = np.zeros(2)
+        self.input_gain = float(model.f(x, 1.0)[1] - model.f(x, 0.0)[1])
+        self.d = 0.0  # [rad/s^2], in u's terms
+        self._rate: float | None = None
+
+    def update(self, inertial_rate: float, u: float) -> float:
+        """The load after this step, from the gimbal's inertial rate [rad/s] and the
+        input u the motor gave over the last step [rad/s^2]."""
+        if self._rate is not None:
+            predicted = float(self.model.f(np.array([0.0, -self._rate]), u)[1])
+            missed = (-inertial_rate - predicted) / self.input_gain
+            missed = min(max(missed, -self.limit), self.limit)
+            self.d += self.gain * (missed - self.d)
+        self._rate = inertial_rate
+        return self.d
 
 
 def identity_gate(y: np.ndarray) -> np.ndarray:
@@ -126,12 +187,15 @@ class ControlStep:
         constants: the link (binds the law).
         actuator: turns u into a motor command and back; holds during the warm-up.
         warmup: no control-law input before this time [s].
+        model: the one-step model of the gimbal (``f``) for the load observer of runs
+            with the vehicle's sensors (None: no load observer).
 
     After a call, :attr:`decision` and :attr:`u` hold what the step decided.
     """
 
     def __init__(self, gate: Callable[[np.ndarray], np.ndarray], supervisor,
-                 law: ControlLaw, constants: LinkConstants, actuator, warmup: float = 0.0):
+                 law: ControlLaw, constants: LinkConstants, actuator, warmup: float = 0.0,
+                 model=None):
         self.gate = gate
         self.supervisor = supervisor
         self.law_template = law
@@ -141,14 +205,25 @@ class ControlStep:
         self.warmup = warmup
         self.decision: Decision | None = None
         self.u = 0.0
+        self.los_angle = 0.0  # bearing the hull's motion has turned [rad]
+        self._holding, self._last_command = False, 0.0
+        self.load = None if model is None else LoadObserver(model)
+        self._motor_u = 0.0  # the phi'' the motor gave last step [rad/s^2]
 
     @property
     def estimator(self):
         return self.supervisor.estimator
 
-    def __call__(self, y: np.ndarray, t: float, q: float = 0.0, qdot: float = 0.0) -> float:
-        """The motor command of step ``t`` [s] from the measured powers ``y`` [W] and the
-        encoder angle ``q`` [rad] and rate ``qdot`` [rad/s]."""
+    def __call__(self, y: np.ndarray, t: float, q: float = 0.0, qdot: float = 0.0,
+                 los=None) -> float:
+        """The motor command of step ``t`` [s] from the measured powers ``y`` [W], the
+        encoder angle ``q`` [rad] and rate ``qdot`` [rad/s], and (None: no vehicle
+        sensors) the vehicle's measured line of sight ``los``."""
+        if los is not None:  # the encoder in the line of sight's frame
+            load = 0.0 if self.load is None else \
+                self.load.update(qdot + los.hull_rate, self._motor_u)
+            self.los_angle += self.constants.Te * los.incidence_rate
+            q, qdot = q - self.los_angle, qdot - los.incidence_rate
         d = self.supervisor.step(t, self.gate(y), q, qdot)
         if d.reseeded:
             self.law = self.law_template.start(self.constants)
@@ -160,8 +235,16 @@ class ControlStep:
             command = act.hold(q, qdot)
             u = 0.0
         else:
+            if self._holding and hasattr(self.law, "take_over"):
+                self.law.take_over(act.acceleration(self._last_command))
             u = self.law(d.xhat, t)
             command = act.torque(u)
+        self._holding = d.torque is None and t < self.warmup
+        self._last_command = command
+        if los is not None:  # turn with the bearing, cancel the load; phi'' gets the rest
+            command += act.torque(-los.acceleration - load)
+            self._motor_u = act.acceleration(act.applied(command))
+            u = self._motor_u + load + los.acceleration
         self.supervisor.predict(u)
         self.decision, self.u = d, u
         return command

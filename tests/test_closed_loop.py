@@ -44,8 +44,11 @@ def test_oracle_aligns_the_receiver():
 
 
 def test_kkl_driven_alignment_is_close_to_the_oracle():
-    kkl = run_once(RunConfig(scenario="align", estimator="kkl"), seed=1)["metrics"]
-    oracle = run_once(RunConfig(scenario="align", estimator="oracle"), seed=1)["metrics"]
+    # A still hull: the estimator's own precision (station keeping moves the receiver by
+    # a few mm, which at 8.5 cm turns the bearing by 1-3e-2 rad: docs/vehicle.md).
+    still = {"scenario": "align", "station_keeping": False}
+    kkl = run_once(RunConfig(estimator="kkl", **still), seed=1)["metrics"]
+    oracle = run_once(RunConfig(estimator="oracle", **still), seed=1)["metrics"]
     assert kkl["availability"] >= 0.9 * oracle["availability"]
     assert kkl["rmse_steady"]["x1"] < 1e-2
 

@@ -67,9 +67,12 @@ def test_shipped_kkl_and_controller_hold_the_link_as_a_policy():
 def test_estimator_wrapper_adds_the_estimate():
     env = EstimatorObservation(gym.make(ENV_ID), estimator="ekf")
     obs, _ = env.reset(seed=0)
-    assert obs.shape == (4,) and env.observation_space.contains(obs)
+    # powers, the vehicle's 5 readings, then the estimate
+    assert obs.shape == (9,) and env.observation_space.contains(obs)
     obs, *_ = env.step(np.zeros(1, np.float32))
     assert np.all(np.isfinite(obs))
+    bare = EstimatorObservation(gym.make(ENV_ID, imu=False), estimator="ekf")
+    assert bare.reset(seed=0)[0].shape == (4,)
     assert ledsim.envs.ENV_ID in gym.registry
 
 
@@ -78,11 +81,11 @@ def test_estimator_wrapper_adds_a_lost_flag_that_a_kick_raises():
     env = EstimatorObservation(gym.make(ENV_ID, disturbances=("kick:start=1.5",)),
                                estimator="ekf", lost_flag=True)
     obs, _ = env.reset(seed=0)
-    assert obs.shape == (5,) and env.observation_space.contains(obs)
+    assert obs.shape == (10,) and env.observation_space.contains(obs)
     flags = []
     for _ in range(300):  # 3 s, holding still: the kick at 1.5 s throws the link out
         obs, *_ = env.step(np.zeros(1, np.float32))
-        flags.append(obs[4])
+        flags.append(obs[-1])
     flags = np.array(flags)
     assert set(flags) <= {0.0, 1.0}
     assert not flags[100:150].any() and flags[150:].any()

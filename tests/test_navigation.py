@@ -124,9 +124,9 @@ def test_bad_noise_settings_are_refused(bad):
 def test_the_thrusters_push_the_hull_within_their_limits():
     w = LinkWorld()
     w.reset()
-    surge, sway, yaw = w.ids.thrusters
-    assert list(w.model.actuator_ctrlrange[[surge, sway, yaw], 1]) == [100.0, 100.0, 25.0]
-    w.data.ctrl[surge] = 1e6  # clipped at 100 N
+    assert list(w.model.actuator_ctrlrange[list(w.ids.thrusters), 1]) == \
+        [100.0, 100.0, 100.0, 25.0, 25.0]  # surge, sway, heave [N]; pitch, yaw [N m]
+    assert list(w.set_thrust([1e6, 0, 0, 0, 0])) == [100.0, 0, 0, 0, 0]  # clipped
     w.step(50)  # 0.1 s
     v = w.hull_velocity()[3:]
     assert 0.05 < v[0] < 0.1 * 100 / 30 and abs(v[1]) < 1e-3  # at most F t / m, forward

@@ -147,9 +147,14 @@ def test_transmitter_motion_moves_the_link_and_current_moves_a_drifting_hull(wor
         parse_disturbance("current:speed=0.3,hold=0")])
     assert np.linalg.norm(drift.hull_pos[-1] - drift.hull_pos[0]) > 0.1
     world.reset()
+    from ledsim.physics.vehicle import Vehicle
+
+    keeper = Vehicle(world, world.config.constants.Te, 0, world.config.constants.distance)
     held = simulate(world, IrradianceSensor(world), 2.0, disturbances=[
-        parse_disturbance("current:speed=0.3")])
-    assert np.abs(held.hull_pos - held.hull_pos[0]).max() < 0.01  # station keeping
+        parse_disturbance("current:speed=0.3")], vehicle=keeper)
+    # Station keeping from its own navigation: a few cm while its disturbance observer
+    # takes up the current's onset (the drifting hull goes more than 10 cm).
+    assert np.abs(held.hull_pos - held.hull_pos[0]).max() < 0.03
     world.reset()
 
 

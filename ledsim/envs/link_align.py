@@ -6,16 +6,24 @@ under the chosen disturbances, from the photodiode powers alone. The world is
 ``scenario="align"`` the episode of ``reset(seed=K)`` is seed K of
 ``ledsim run --scenario align`` until the actions differ.
 
-**Observation** (``Box(low, high, (2,), float64)``: from 20 noise standard deviations
-below zero to the power at 1 cm from the LED plus as much; a measured power never
-leaves it)
+**Observation** (``Box(low, high, (7,), float64)``; ``(2,)`` with ``imu=False``. The
+powers run from 20 noise standard deviations below zero to the power at 1 cm from the
+LED plus as much, so a measured power never leaves them; the vehicle's readings are
+clipped to the bounds below)
 
-===  ===============================================  =====
-idx  observation                                      unit
-===  ===============================================  =====
-0    measured power of photodiode 1 (with noise)      W
-1    measured power of photodiode 2 (with noise)      W
-===  ===============================================  =====
+===  =======================================================  =====  =============
+idx  observation                                              unit   bound
+===  =======================================================  =====  =============
+0    measured power of photodiode 1 (with noise)              W      see above
+1    measured power of photodiode 2 (with noise)              W      see above
+2    the IMU's yaw rate (gyro z, with noise)                  rad/s  +-60
+3    the DVL's velocity, x of its frame (with noise)          m/s    +-5
+4    the DVL's velocity, y of its frame (with noise)          m/s    +-5
+5    the gimbal's encoder angle (14-bit, within one turn)     rad    +-pi
+6    the line-of-sight rate the vehicle measures (Vehicle)    rad/s  +-100
+===  =======================================================  =====  =============
+
+The vehicle keeps station on its thrusters by default (``station_keeping``).
 
 **Action** (``Box(-1, 1, (1,), float32)``)
 
@@ -39,6 +47,7 @@ powers and the time [s], for evaluation only.
 
 from __future__ import annotations
 
+import math
 from dataclasses import replace
 
 import gymnasium as gym
@@ -49,11 +58,15 @@ from gymnasium.utils import EzPickle
 from ..config import LinkConstants
 from ..control import receiver_peak
 from ..loop.closed_loop import start_world
-from ..loop.config import RunConfig, TaskPart, WorldPart
+from ..loop.config import EstimatorPart, RunConfig, TaskPart, WorldPart
 from ..optics import IMPOSSIBLE_SIGMAS, achievable_power, peak_power
 from ..physics.sensor import SensorReading
 from ..physics.system import GimbalSystem
 from ..physics.tick import advance
+
+#: Bounds of the vehicle's readings in the observation (indices 2-6): gyro z [rad/s],
+#: DVL x, y [m/s], encoder [rad], LOS rate [rad/s].
+VEHICLE_BOUND = np.array([60.0, 5.0, 5.0, math.pi, 100.0])
 
 #: The closest the receiver can come to the LED [m] (their housings touch): the
 #: observation space's upper bound is the power there.
@@ -78,6 +91,9 @@ class LinkAlignEnv(gym.Env, EzPickle):
         integrator: MuJoCo integrator (``implicitfast``, ``euler``, ...; see
             docs/integrators.md).
         scene: MJCF scene file (None: the shipped one).
+        imu: observe the vehicle's IMU, DVL and encoder (indices 2-6); the shipped
+            policy then uses them as ``ledsim run`` does.
+        station_keeping: the vehicle holds its pose on its thrusters.
     """
 
     metadata = {"render_modes": ["rgb_array"], "render_fps": 100}
@@ -88,12 +104,14 @@ class LinkAlignEnv(gym.Env, EzPickle):
                  torque_limit: float = WorldPart.torque_limit, frame_skip: int = 5,
                  phi0_range: float = 0.3, render_mode: str | None = None, width: int = 640,
                  height: int = 480, camera: str = "side",
-                 integrator: str = WorldPart.integrator, scene: str | None = None):
+                 integrator: str = WorldPart.integrator, scene: str | None = None,
+                 imu: bool = EstimatorPart.imu,
+                 station_keeping: bool = WorldPart.station_keeping):
         # Pickles as its constructor arguments (MuJoCo's model does not pickle), as
         # Gymnasium's MuJoCo environments do: the copy is a new environment.
         EzPickle.__init__(self, scenario, distance, noise_scale, disturbances, torque_limit,
                           frame_skip, phi0_range, render_mode, width, height, camera,
-                          integrator, scene)
+                          integrator, scene, imu, station_keeping)
         if render_mode not in (None, "rgb_array"):
             raise ValueError(f"render_mode={render_mode!r}: use None or 'rgb_array'")
         if int(frame_skip) < 1:
@@ -101,8 +119,10 @@ class LinkAlignEnv(gym.Env, EzPickle):
         if isinstance(disturbances, str):
             disturbances = (disturbances,)
         self.cfg = RunConfig.of(
-            WorldPart(distance, torque_limit, noise_scale, scene, integrator),
-            TaskPart(scenario=scenario or TaskPart.scenario, disturbances=tuple(disturbances)))
+            WorldPart(distance, torque_limit, noise_scale, scene, integrator,
+                      bool(station_keeping)),
+            TaskPart(scenario=scenario or TaskPart.scenario, disturbances=tuple(disturbances)),
+            EstimatorPart(imu=bool(imu)))
         self.cfg.validate()
         world_config = self.cfg.world_config()
         Te = world_config.timestep * int(frame_skip)
@@ -127,9 +147,13 @@ class LinkAlignEnv(gym.Env, EzPickle):
         self.metadata = {**self.metadata, "render_fps": int(round(1.0 / self.dt))}
         self._render_args = (width, height, camera)
         self._recorder = None
-        self.observation_space = spaces.Box(-margin, closest + margin, (2,), np.float64)
+        low, high = np.array([-margin] * 2), np.array([closest + margin] * 2)
+        if self.cfg.imu:
+            low, high = np.r_[low, -VEHICLE_BOUND], np.r_[high, VEHICLE_BOUND]
+        self.observation_space = spaces.Box(low, high, dtype=np.float64)
         self.action_space = spaces.Box(-1.0, 1.0, (1,), np.float32)
         self.sensor = None
+        self.vehicle = None
         self.disturbances: list = []
         self.reading: SensorReading | None = None
         self.run_seed: int | None = None
@@ -142,7 +166,13 @@ class LinkAlignEnv(gym.Env, EzPickle):
         info = {"phi": r.phi, "phidot": r.phidot, "power_clean": r.power_clean.copy(),
                 "time": self.k * self.dt}
         space = self.observation_space
-        return np.clip(r.power.astype(np.float64), space.low, space.high), info
+        obs = r.power.astype(np.float64)
+        if self.cfg.imu:
+            v = self.vehicle
+            nav = v.reading
+            encoder = math.remainder(nav.encoder, 2 * math.pi)
+            obs = np.r_[obs, nav.gyro[2], nav.dvl[0], nav.dvl[1], encoder, v.los.rate]
+        return np.clip(obs, space.low, space.high), info
 
     def share_of_achievable(self) -> float:
         """Photodiode 1's noise-free power over the most the current geometry allows
@@ -161,8 +191,8 @@ class LinkAlignEnv(gym.Env, EzPickle):
             self.run_seed = int(self.np_random.integers(2**31))
         else:
             self.run_seed = int(seed)
-        self.sensor, self.disturbances = start_world(self.cfg, self.system, self.world,
-                                                     self.run_seed, x0)
+        self.sensor, self.disturbances, self.vehicle = start_world(
+            self.cfg, self.system, self.world, self.run_seed, x0)
         self.start_gimbal_angle = self.world.gimbal_angle
         self.k = 0
         self.episode += 1
@@ -177,7 +207,8 @@ class LinkAlignEnv(gym.Env, EzPickle):
                              "[-1, 1]")
         a = min(max(float(a[0]), -1.0), 1.0)
         self.k += 1
-        advance(self.world, self.disturbances, a * self.torque_limit, self.k * self.dt)
+        advance(self.world, self.disturbances, a * self.torque_limit, self.k * self.dt,
+                self.vehicle)
         obs, info = self._observe()
         reward = self.share_of_achievable()
         return obs, reward, False, False, info

@@ -67,8 +67,9 @@ class ShippedAlignmentPolicy:
         if self._episode != env.episode:
             self._start()
         r = env.reading
+        los = env.vehicle.los if self.cfg.imu else None
         torque = self.step(np.asarray(obs, dtype=float)[:2], env.k * env.dt,
-                           r.gimbal_angle, r.gimbal_rate)
+                           r.gimbal_angle, r.gimbal_rate, los)
         return np.array([torque_action(torque, env.torque_limit)])
 
 
@@ -119,7 +120,8 @@ class EstimatorObservation(gym.ObservationWrapper, gym.utils.RecordConstructorAr
     def step(self, action):
         base = self.env.unwrapped
         a = min(max(float(np.asarray(action, dtype=float).reshape(-1)[0]), -1.0), 1.0)
-        self.supervisor.predict(self.motor.acceleration(a * base.torque_limit))
+        hull = base.vehicle.los.acceleration if base.cfg.imu else 0.0
+        self.supervisor.predict(self.motor.acceleration(a * base.torque_limit) + hull)
         return super().step(action)
 
     def observation(self, obs):

@@ -17,6 +17,7 @@ import sys
 import time
 from collections.abc import Callable, Sequence
 from concurrent.futures import ThreadPoolExecutor
+from typing import NamedTuple
 
 import numpy as np
 from tqdm.auto import tqdm
@@ -29,6 +30,7 @@ from ..physics.sensor import IrradianceSensor, SensorReading
 from ..physics.simulation import SimulationResult
 from ..physics.system import GimbalSystem
 from ..physics.tick import advance, prepare
+from ..physics.vehicle import Vehicle
 from ..physics.world import LinkWorld
 from ..step import ControlStep, GimbalMotor, Unsupervised
 from .config import RunConfig
@@ -43,19 +45,32 @@ from .outcome import RunOutcome, Trace, achievable_power, outcome  # noqa: F401
 from .supervisor import LinkSupervisor
 
 
+class Surroundings(NamedTuple):
+    """What a run's world is given at its start: the photodiodes' sensor, the
+    disturbances and the vehicle (None: a scene without the vehicle's sensors, run with
+    ``--no-imu``)."""
+
+    sensor: IrradianceSensor
+    disturbances: list
+    vehicle: Vehicle | None
+
+
 def start_world(cfg: RunConfig, system: GimbalSystem, world: LinkWorld, seed: int,
-                x0: tuple[float, float] | None = None) -> tuple[IrradianceSensor, list]:
+                x0: tuple[float, float] | None = None) -> Surroundings:
     """Put ``world`` in the scenario's initial state (or the true state ``x0``: phi
-    [rad], phidot [rad/s]), ready for step 0, and give it the run's sensor and
-    disturbances, both seeded with ``seed``."""
+    [rad], phidot [rad/s]), ready for step 0, and give it the run's sensor,
+    disturbances and vehicle, all seeded with ``seed``."""
     x0 = cfg.scenario_spec.x0 if x0 is None else x0
     world.reset(gimbal_angle=system.phi_home - x0[0], gimbal_rate=0.0 - x0[1])
     sensor = IrradianceSensor(world, seed=seed, noise_scale=cfg.noise_scale)
     disturbances = [parse_disturbance(d) for d in cfg.disturbances]
     for d in disturbances:
         d.reset(seed)
-    prepare(world, disturbances, world.time)
-    return sensor, disturbances
+    vehicle = None
+    if cfg.imu or world.ids.vehicle_sensors is not None:
+        vehicle = Vehicle(world, system.Te, seed, cfg.distance, cfg.station_keeps)
+    prepare(world, disturbances, world.time, vehicle)
+    return Surroundings(sensor, disturbances, vehicle)
 
 
 def make_supervisor(cfg: RunConfig, system: GimbalSystem, estimator, estimator_system,
@@ -68,7 +83,8 @@ def make_supervisor(cfg: RunConfig, system: GimbalSystem, estimator, estimator_s
                / system.constants.measurement_noise_std)
     return LinkSupervisor(estimator, system.constants, system.inertia,
                           warmup=cfg.scenario_spec.warmup, reacquire=reacquire,
-                          gain_ratio=prior, noise_ratio=cfg.noise_scale / prior / carried)
+                          gain_ratio=prior, noise_ratio=cfg.noise_scale / prior / carried,
+                          dead_reckon=cfg.imu)
 
 
 def run_supervisor(cfg: RunConfig, system: GimbalSystem, model, seed: int,
@@ -93,8 +109,9 @@ def control_step(cfg: RunConfig, system: GimbalSystem, model, seed: int, q_hold:
     scenario's law, and the gimbal motor holding ``q_hold`` [rad] during the warm-up."""
     spec = cfg.scenario_spec
     supervisor = run_supervisor(cfg, system, model, seed, truth, spec.law.tracks_beam)
+    motor = GimbalMotor(system.inertia, q_hold, limit=system.config.torque_limit)
     return ControlStep(dropout_gate(system.constants, supervisor), supervisor, spec.law,
-                       system.constants, GimbalMotor(system.inertia, q_hold), spec.warmup)
+                       system.constants, motor, spec.warmup, model=model)
 
 
 def dropout_gate(constants, supervisor) -> DropoutGate:
@@ -113,7 +130,8 @@ class LoopRun:
                  world: LinkWorld, steps: int):
         self.seed = seed
         self.world = world
-        self.sensor, self.disturbances = start_world(cfg, system, world, seed)
+        self.sensor, self.disturbances, self.vehicle = start_world(cfg, system, world, seed)
+        self.aided = cfg.imu
         self.reading: SensorReading | None = None
         self.step = control_step(cfg, system, model, seed, world.gimbal_angle,
                                  lambda: self.reading.x)
@@ -138,7 +156,8 @@ class LoopRun:
         self.gimbal[k] = r.gimbal_angle, r.gimbal_rate
         self.hull[k], self.power[k], self.clean[k] = r.hull_pos, r.power, r.power_clean
         t0 = time.perf_counter()
-        torque = self.step(r.power, t, r.gimbal_angle, r.gimbal_rate)
+        los = self.vehicle.los if self.aided else None
+        torque = self.step(r.power, t, r.gimbal_angle, r.gimbal_rate, los)
         self.spent += time.perf_counter() - t0
         d = self.step.decision
         self.xhat[k] = d.xhat
@@ -187,7 +206,8 @@ class ClosedLoop:
     def _advance(self, chunk: range, torques: list, k: int, t_next: float) -> None:
         for i in chunk:
             run = self.runs[i]
-            run.applied[k] = advance(run.world, run.disturbances, torques[i], t_next)
+            run.applied[k] = advance(run.world, run.disturbances, torques[i], t_next,
+                                     run.vehicle)
 
     def run(self, keep_trace: bool | Sequence[bool] = False,
             progress: bool = False) -> list[RunOutcome]:

@@ -54,6 +54,8 @@ class WorldPart:
         noise_scale: multiplies the measurement-noise standard deviation [-].
         scene: MJCF scene file (None: the shipped one).
         integrator: MuJoCo integrator of the world (``implicitfast``, ``euler``, ...).
+        station_keeping: the vehicle holds its pose on its thrusters, from its own
+            navigation (:class:`~ledsim.physics.vehicle.Vehicle`); off: it drifts.
     """
 
     distance: float = PAPER_DISTANCE
@@ -61,6 +63,7 @@ class WorldPart:
     noise_scale: float = 1.0
     scene: str | None = None
     integrator: str = "implicitfast"
+    station_keeping: bool = True
 
     def world_config(self, distance: float | None = None) -> WorldConfig:
         """The MuJoCo world (at ``distance`` [m] instead, when given); its control period
@@ -104,6 +107,9 @@ class EstimatorPart:
             ``configured`` (their model is the configured distance's) or ``nominal``
             (the paper distance's model, rescaled by the supervisor's gain tracker: what
             the KKL knows).
+        imu: the control step uses the vehicle's IMU, DVL and encoder (line-of-sight
+            feed-forward, the hull's motion as a known input of the estimator); off: the
+            photodiodes and the gimbal torque only, as in the paper.
     """
 
     estimator: str = "kkl"
@@ -111,6 +117,7 @@ class EstimatorPart:
     checkpoint: str | None = None
     omega_model: str = "identified"
     filter_distance: str = "configured"
+    imu: bool = True
 
 
 @dataclass(frozen=True)
@@ -163,6 +170,8 @@ class RunConfig:
     supervision: bool = TaskPart.supervision
     integrator: str = WorldPart.integrator
     filter_distance: str = EstimatorPart.filter_distance
+    station_keeping: bool = WorldPart.station_keeping
+    imu: bool = EstimatorPart.imu
 
     @classmethod
     def of(cls, world: WorldPart = WorldPart(), task: TaskPart = TaskPart(),
@@ -213,6 +222,12 @@ class RunConfig:
         spec = self.scenario_spec
         return spec.steady_from if self.run_seconds > spec.steady_from else \
             0.5 * self.run_seconds
+
+    @property
+    def station_keeps(self) -> bool:
+        """The vehicle keeps station: asked for, and no current says ``hold=0``."""
+        return self.station_keeping and not any(
+            getattr(parse_disturbance(d), "hold", 1.0) == 0.0 for d in self.disturbances)
 
     @property
     def run_seconds(self) -> float:

@@ -17,6 +17,16 @@ from ..results import DictAccess
 
 ALIGN_TOLERANCE = math.radians(1.0)  # |phi - phi_ref| below this counts as aligned [rad]
 AVAILABILITY_LEVEL = 0.9  # the link is available while P1 >= 90% of its maximum
+#: The geometry allows a link while the most P1 could receive is at least this many
+#: noise standard deviations (6 dB; the peak at 0.3 m, the far end of the served range,
+#: is 2.5): below it, 90% of next to nothing is not a link.
+GEOMETRY_SNR = 2.0
+#: Recovery: the first time after an event from which the link is available in this
+#: share of a RECOVERY_WINDOW, or in 0.9 of the share it had in the second before the
+#: event if that was lower (a vibrating hull never reaches 0.8, the oracle included).
+RECOVERY_SHARE = 0.8
+RECOVERY_WINDOW = 0.5  # [s]
+RECOVERY_FLOOR = 0.2  # the least share that counts as a link back
 
 
 @dataclass
@@ -29,10 +39,14 @@ class RunMetrics(DictAccess):
         alignment_time: first time |phi - phi_ref| < 1 deg for 0.5 s [s] (None: never).
         availability: share of the run with P1 >= 90% of the most it could receive at
             that moment's geometry (distance and LED angle; a perfectly pointed
-            photodiode 1) [-].
+            photodiode 1), counting only steps whose geometry allows a link [-].
+        geometry_share: share of the run whose geometry allows a link at all: the most
+            P1 could receive is at least GEOMETRY_SNR noise standard deviations [-].
         mean_power: mean noise-free P1 [W].
-        recovery_time: after a transient event (an occlusion) ends, time until aligned
-            again [s]; None without such an event or without recovery.
+        recovery_time: after a transient event (an occlusion, a kick) ends, the time
+            until the link is back: available in RECOVERY_SHARE of a RECOVERY_WINDOW, or
+            in 0.9 of its share over the second before the event if that was lower [s];
+            None without such an event or without recovery.
         lost_share: share of the run the supervisor flagged the link lost [-].
         link_events: each loss of the link as ``[t_lost, t_recovered]`` [s]
             (``t_recovered`` None when the run ended lost).
@@ -58,6 +72,7 @@ class RunMetrics(DictAccess):
     ber: float | None = None
     throughput_bps: float | None = None
     fec_share: float | None = None
+    geometry_share: float = 1.0
 
 
 def link_events(lost: np.ndarray, Te: float) -> list[list]:
@@ -105,9 +120,14 @@ def run_metrics(x: np.ndarray, xhat: np.ndarray, power_clean: np.ndarray, steady
     es = rmse(xhat, x, int(round(steady_from / Te)))
     aligned = np.abs(x[:, 0] - intensity_maximum(constants)) < ALIGN_TOLERANCE
     p1 = power_clean[:, 0]
+    best = np.full(len(p1), peak_power(constants)) if power_max is None else power_max
+    floor = 0.0 if noise_std is None else GEOMETRY_SNR * noise_std
+    possible = best >= floor
+    available = (p1 >= AVAILABILITY_LEVEL * best) & possible
     recovery = None
     if event_end is not None:
-        recovery = first_settled(aligned[int(round(event_end / Te)):], Te)
+        recovery = _recovery(available, Te, event_end,
+                             event_start if event_start is not None else event_end)
     events = [] if lost is None else link_events(lost, Te)
     delay = None
     if event_start is not None:
@@ -120,9 +140,24 @@ def run_metrics(x: np.ndarray, xhat: np.ndarray, power_clean: np.ndarray, steady
         rmse={"x1": float(e[0]), "x2": float(e[1])},
         rmse_steady={"x1": float(es[0]), "x2": float(es[1])},
         alignment_time=first_settled(aligned, Te),
-        availability=float(np.mean(p1 >= AVAILABILITY_LEVEL * (
-            peak_power(constants) if power_max is None else power_max))),
+        availability=float(np.mean(available)),
         mean_power=float(np.mean(p1)),
         recovery_time=recovery,
         lost_share=0.0 if lost is None else float(np.mean(lost)),
-        link_events=events, detection_delay=delay, **budget)
+        link_events=events, detection_delay=delay, geometry_share=float(np.mean(possible)),
+        **budget)
+
+
+def _recovery(available: np.ndarray, Te: float, end: float, start: float) -> float | None:
+    """Time [s] from ``end`` to the first RECOVERY_WINDOW in which the link is available
+    in RECOVERY_SHARE of the steps, or in 0.9 of its share over the second before
+    ``start`` if that was lower, but never less than RECOVERY_FLOOR (None: never)."""
+    k0, k1 = int(round(max(start - 1.0, 0.0) / Te)), int(round(start / Te))
+    before = float(np.mean(available[k0:k1])) if k1 > k0 else 1.0
+    share = min(RECOVERY_SHARE, max(0.9 * before, RECOVERY_FLOOR))
+    n = max(1, int(round(RECOVERY_WINDOW / Te)))
+    after = available[int(round(end / Te)):].astype(float)
+    if len(after) < n:
+        return None
+    ok = np.flatnonzero(np.convolve(after, np.ones(n), mode="valid") >= share * n - 1e-9)
+    return None if ok.size == 0 else float(ok[0] * Te)

@@ -14,6 +14,7 @@ from observer.metrics import mean_and_spread
 from ..linkbudget import BIT_RATE
 from ..montecarlo import run_jobs
 from ..outputs import atomic_write_bytes
+from ..physics.disturbances import parse_disturbance
 from ..results import DictAccess, write_json
 from .closed_loop import RunOutcome, Trace, check_checkpoint, run_batch
 from .config import RunConfig
@@ -44,7 +45,9 @@ class RunSummary(DictAccess):
     """What ``ledsim run`` writes to ``results.json`` (units as in :class:`RunMetrics`).
 
     ``link_events`` lists, per seed, each loss of the link as ``[t_lost, t_recovered]``
-    [s]; ``recovery_time.n`` counts the seeds that were aligned again after the event."""
+    [s]; ``recovery_time.n`` counts the seeds whose link came back after the event (of
+    ``seeds``); ``imu`` says whether the control step used the vehicle's IMU, DVL and
+    encoder, ``station_keeping`` whether the vehicle held its pose."""
 
     scenario: str
     estimator: str
@@ -61,6 +64,7 @@ class RunSummary(DictAccess):
     alignment_time: Stat
     aligned_runs: int
     availability: Stat
+    geometry_share: Stat
     mean_power: Stat
     recovery_time: Stat
     lost_share: Stat
@@ -74,6 +78,8 @@ class RunSummary(DictAccess):
     filter_distance: str
     link_events: list
     supervision: bool
+    imu: bool
+    station_keeping: bool
     us_per_step: Stat
     realtime_factor: Stat
 
@@ -92,6 +98,7 @@ def summarize(cfg: RunConfig, outs: list[RunOutcome]) -> RunSummary:
         alignment_time=stat(lambda o: o.metrics.alignment_time),
         aligned_runs=sum(o.metrics.alignment_time is not None for o in outs),
         availability=stat(lambda o: o.metrics.availability),
+        geometry_share=stat(lambda o: o.metrics.geometry_share),
         mean_power=stat(lambda o: o.metrics.mean_power),
         recovery_time=stat(lambda o: o.metrics.recovery_time),
         lost_share=stat(lambda o: o.metrics.lost_share),
@@ -106,6 +113,8 @@ def summarize(cfg: RunConfig, outs: list[RunOutcome]) -> RunSummary:
         link_events=[{"seed": k, "lost_recovered": o.metrics.link_events}
                      for k, o in enumerate(outs)],
         supervision=cfg.supervision,
+        imu=cfg.imu,
+        station_keeping=cfg.station_keeps,
         us_per_step=stat(lambda o: o.us_per_step),
         realtime_factor=stat(lambda o: o.realtime_factor))
 
@@ -169,6 +178,18 @@ TABLE_HEADER = ("| scenario | disturbance | estimator | x1 RMSE [rad] | x2 RMSE 
                 "| RTF |\n|---|---|---|---|---|---|---|---|---|---|---|")
 
 
+def recovered(s: RunSummary) -> str:
+    """The recovery cell: mean time [s] and how many seeds recovered, ``0.52 (2/4)``;
+    ``- (0/4)`` when none did; ``-`` without an event."""
+    if s.recovery_time.mean is None:
+        return f"- (0/{s.seeds})" if _has_event(s) else "-"
+    return f"{s.recovery_time.mean:.2f} ({s.recovery_time.n}/{s.seeds})"
+
+
+def _has_event(s: RunSummary) -> bool:
+    return any(parse_disturbance(d).event_end is not None for d in s.disturbances)
+
+
 def format_summary(s: RunSummary, first_cell: str | None = None) -> str:
     """One markdown row of :data:`TABLE_HEADER` (``first_cell``: instead of the scenario)."""
     def f(stat: Stat, fmt="{:.2e}"):
@@ -178,5 +199,5 @@ def format_summary(s: RunSummary, first_cell: str | None = None) -> str:
             f"| {s.estimator} | {f(s.rmse_steady_x1)} | {f(s.rmse_steady_x2)} "
             f"| {f(s.alignment_time, '{:.2f}')} | {f(s.availability, '{:.3f}')} "
             f"| {f(s.fec_share, '{:.3f}')} | {f(s.mean_power, '{:.3f}')} "
-            f"| {f(s.recovery_time, '{:.2f}')} "
+            f"| {recovered(s)} "
             f"| {f(s.realtime_factor, '{:.0f}')} |")

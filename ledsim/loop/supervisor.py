@@ -40,6 +40,9 @@ def model_gain(model, constants: LinkConstants) -> float:
 #: kick), so the link is lost now, not when the dropout gate gives up (1 s later).
 BLIND_TRAVEL = 0.2
 
+#: A sample held this long [s] is an occlusion, for the encoder to carry the estimate.
+DEAD_RECKON_AFTER = 0.05
+
 
 class LinkSupervisor:
     """Gain normalisation, loss detection, acquisition scan and re-seeding for one run.
@@ -55,11 +58,15 @@ class LinkSupervisor:
             at the initial gain [-]. The sensor's own noise is known (the Bayesian filters
             are told it too); in the model's gain it scales as 1 / gain, so a bank of
             observers follows the tracked gain.
+        dead_reckon: while a sample is gated out (an occlusion), the encoder in the line
+            of sight's frame carries the estimate, phi = phi_0 - (q - q_0) from the
+            last fully lit step, and the estimator restarts from it when the light
+            returns (for runs whose encoder angle is in that frame: the IMU's).
     """
 
     def __init__(self, estimator: Estimator, constants: LinkConstants, inertia: float,
                  warmup: float = 0.0, reacquire: bool = True, gain_ratio: float = 1.0,
-                 noise_ratio: float = 1.0):
+                 noise_ratio: float = 1.0, dead_reckon: bool = False):
         self.estimator = estimator
         model = estimator.system
         self.monitor = ResidualMonitor(model, noise_ratio=noise_ratio)
@@ -74,6 +81,10 @@ class LinkSupervisor:
         # Encoder angles of the last trusted steps: a loss is flagged up to about 0.2 s
         # late, so the scan centres on the oldest, from before the trouble began.
         self.trusted_q: deque = deque(maxlen=max(1, int(round(0.3 / constants.Te))))
+        self.dead_reckon = dead_reckon
+        self._lit: tuple[float, float] | None = None  # (phi, q) of the last lit step
+        self._anchor: tuple[float, float] | None = None  # ... when the gate closed
+        self._gated, self.Te = 0, constants.Te
 
     def noise_ratio(self) -> float:
         """Measurement noise in the model's gain over the model's nominal noise [-]: the
@@ -85,12 +96,37 @@ class LinkSupervisor:
         """Move the estimator to the next step under input ``u`` [rad/s^2]."""
         self.estimator.predict(u)
 
+    def _dead_reckon(self, xhat, y, y_model, q: float, qdot: float) -> np.ndarray:
+        """The estimate while the gate holds a sample: the encoder's, from the last lit
+        step. When every sample is back after an occlusion (a hold of at least
+        DEAD_RECKON_AFTER; a dim link's short holds are not), the estimator restarts
+        from it."""
+        gated = not np.isfinite(y).all()
+        if gated:
+            self._gated += 1
+            if self._gated == 1:
+                self._anchor = self._lit
+        held, self._gated = self._gated, self._gated if gated else 0
+        if self._anchor is None:
+            return xhat
+        phi0, q0 = self._anchor
+        carried = np.array([phi0 - (q - q0), -qdot])
+        if gated:
+            return carried
+        self._anchor = None
+        if held * self.Te < DEAD_RECKON_AFTER:
+            return xhat
+        self.estimator.reset(carried)
+        return self.estimator.update(y_model)
+
     def step(self, t: float, y: np.ndarray, q: float, qdot: float) -> Decision:
         """Step ``t`` [s]: gated powers ``y`` [W], encoder angle ``q`` [rad] and rate
         ``qdot`` [rad/s]. The estimator has taken the measurement when this returns."""
         est, scan = self.estimator, self.scan
         y_model = self.gain.normalize(y)
         xhat = est.update(y_model)
+        if self.dead_reckon:
+            xhat = self._dead_reckon(xhat, y, y_model, q, qdot)
         lost = self.monitor.update(y_model, xhat)
         blind = not np.isfinite(y).any()
         turned = blind and bool(self.trusted_q) and \
@@ -100,6 +136,8 @@ class LinkSupervisor:
         if not (lost or scan.active):
             if not blind:  # only angles the beam confirmed: a spun gimbal's are not
                 self.trusted_q.append(q)
+            if np.isfinite(y).all():
+                self._lit = (float(xhat[0]), q)
             self.gain.update(y, self.monitor.noise_std * self.gain.ratio)
             if isinstance(est, ObserverBank):
                 # The member trained for the noise the rescaled powers now carry.

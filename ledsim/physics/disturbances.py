@@ -75,20 +75,20 @@ class HullVibration(Disturbance):
 
 @dataclass
 class WaterCurrent(Disturbance):
-    """Water current through MuJoCo's medium velocity (``opt.wind``), with the AUV
-    holding station against it.
+    """Water current through MuJoCo's medium velocity (``opt.wind``).
 
     A free-floating AUV would simply drift away with the water (0.3 m/s is 3 m in 10 s,
-    far more than the 8.5 cm link), so by default its thrusters hold the home pose with
-    a PID on position and yaw (``hold=1``); what reaches the link is the residual motion
-    the gusts leave.
+    far more than the 8.5 cm link); the vehicle's station keeping
+    (:class:`~ledsim.physics.vehicle.Vehicle`, on by default in every scenario) holds it
+    on its thrusters, from its own navigation. ``hold=0`` turns that off for the run:
+    the hull drifts with the water.
 
     Attributes:
         speed: steady current speed [m/s].
         heading: direction of the current in the horizontal plane [rad] (0 = +x).
         gust: standard deviation of the gusts [m/s] (Ornstein-Uhlenbeck process).
         gust_time: correlation time of the gusts [s].
-        hold: 1 = station keeping on, 0 = drift with the water.
+        hold: 1 = the vehicle keeps station, 0 = it drifts with the water.
         seed: seed of the gusts.
     """
 
@@ -101,10 +101,6 @@ class WaterCurrent(Disturbance):
     hold: float = 1.0
     seed: int = 0
 
-    # Station-keeping gains (N/m, N s/m, N/(m s); N m/rad, N m s/rad, N m/(rad s)).
-    KP, KD, KI = 2000.0, 500.0, 2000.0
-    KP_YAW, KD_YAW, KI_YAW = 200.0, 50.0, 200.0
-
     def __post_init__(self):
         self.reset(self.seed)
 
@@ -113,23 +109,10 @@ class WaterCurrent(Disturbance):
         self._rng = np.random.default_rng(seed)
         self._g = np.zeros(3)
         self._last_t = None
-        self._int = np.zeros(4)
-
-    def _hold(self, world: LinkWorld, dt: float) -> None:
-        err = world.hull_pos - world.initial_hull_pos
-        yaw = world.hull_yaw
-        vel = world.hull_velocity()
-        self._int += dt * np.r_[err, yaw]
-        world.add_hull_wrench(
-            force=-self.KP * err - self.KD * vel[3:] - self.KI * self._int[:3],
-            torque=(0.0, 0.0, -self.KP_YAW * yaw - self.KD_YAW * vel[2] - self.KI_YAW *
-                    self._int[3]))
 
     def apply(self, world: LinkWorld, t: float) -> None:
         dt = 0.0 if self._last_t is None else t - self._last_t
         self._last_t = t
-        if self.hold:
-            self._hold(world, dt)
         if dt > 0 and self.gust > 0:
             a = math.exp(-dt / self.gust_time)
             self._g = a * self._g + self.gust * math.sqrt(1 - a * a) * \

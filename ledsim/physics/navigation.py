@@ -13,6 +13,7 @@ accel           white (velocity random walk) + a drifting bias          m/s^2
 dvl             white per ping; the last ping held between pings         m/s
 encoder         quantised to the encoder's step                          rad
 position_fix    white, once per fix interval (None between fixes)        m
+depth           white (a pressure sensor), every step; positive down    m
 ==============  =======================================================  ===========
 
 Its random numbers come from a generator of its own, seeded from the run's seed, so
@@ -38,13 +39,15 @@ class NavigationReading:
     """One control step of the vehicle's sensors, with their noise (see the module
     docstring): gyro (3,) [rad/s] and accel (3,) [m/s^2] in the IMU frame, dvl (3,)
     [m/s] in the DVL frame, encoder [rad], position_fix (3,) [m] in the world frame or
-    None when no fix arrived this step."""
+    None when no fix arrived this step, depth [m] of the IMU below its start, positive
+    down (a pressure sensor)."""
 
     gyro: np.ndarray
     accel: np.ndarray
     dvl: np.ndarray
     encoder: float
     position_fix: np.ndarray | None
+    depth: float = 0.0
 
 
 class NavigationSensor:
@@ -77,6 +80,7 @@ class NavigationSensor:
         self._decay = (math.exp(-Te / n.gyro_bias_time), math.exp(-Te / n.accel_bias_time))
         self.k = 0
         self._dvl: np.ndarray | None = None
+        self.surface = float(world.vehicle_motion().position[2])  # depth 0: the start
 
     def _due(self, rate: float) -> bool:
         """A measurement at ``rate`` [Hz] falls in this control step (step 0 included)."""
@@ -103,5 +107,6 @@ class NavigationSensor:
             if self._due(n.fix_rate) else None
         step = n.encoder_step
         encoder = step * math.floor(truth.encoder / step + 0.5)
+        depth = self.surface - truth.position[2] + rng.standard_normal() * n.depth_noise
         self.k += 1
-        return NavigationReading(gyro, accel, self._dvl.copy(), encoder, fix)
+        return NavigationReading(gyro, accel, self._dvl.copy(), encoder, fix, float(depth))

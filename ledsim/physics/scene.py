@@ -57,6 +57,9 @@ class WorldConfig:
         aperture_radius: radius of the LED's emitting aperture [m].
         integrator: MuJoCo integrator, one of :data:`INTEGRATORS` (implicitfast treats
             the fluid damping implicitly; euler is cheaper per step, see docs/physics.md).
+        metacentric_height: the hull's centre of buoyancy above its centre of mass [m]
+            (BG): buoyancy's righting moment in pitch and roll. 2 cm, the order of a
+            small torpedo AUV's (a REMUS-100's is about 1-2 cm).
     """
 
     constants: LinkConstants = field(default_factory=LinkConstants)
@@ -72,6 +75,7 @@ class WorldConfig:
     n_rays: int = 5
     aperture_radius: float = 0.003
     integrator: str = "implicitfast"
+    metacentric_height: float = 0.02
 
     def __post_init__(self):
         if self.integrator not in INTEGRATORS:
@@ -86,6 +90,8 @@ class WorldConfig:
              f"in (0, Te={self.constants.Te}] s"),
             ("n_rays", self.n_rays, self.n_rays >= 1, ">= 1"),
             ("aperture_radius", self.aperture_radius, self.aperture_radius >= 0, ">= 0 m"),
+            ("metacentric_height", self.metacentric_height, self.metacentric_height >= 0,
+             ">= 0 m"),
         ]
         if self.hull_mass is not None:
             checks.append(("hull_mass", self.hull_mass, self.hull_mass > 0, "> 0 kg"))
@@ -196,8 +202,8 @@ class SceneIds:
         motor: actuator id of the gimbal motor.
         vehicle_sensors: sensordata addresses of the vehicle's sensors, in the order of
             :data:`VEHICLE_SENSORS` (None: the scene lacks one of them).
-        thrusters: actuator ids of the hull's surge, sway and yaw thrusters (None: the
-            scene lacks one of them).
+        thrusters: actuator ids of the hull's surge, sway, heave, pitch and yaw thrusters
+            (None: the scene lacks one of them).
     """
 
     hull_body: int
@@ -208,7 +214,7 @@ class SceneIds:
     hinge_dof: int
     motor: int
     vehicle_sensors: tuple[int, ...] | None = None
-    thrusters: tuple[int, int, int] | None = None
+    thrusters: tuple[int, ...] | None = None
 
     @classmethod
     def of(cls, m) -> SceneIds:
@@ -231,8 +237,10 @@ VEHICLE_SENSORS = ("imu_gyro", "imu_accel", "dvl_velocity", "gimbal_encoder",
                    "acoustic_fix")
 
 
-#: The hull's thrusters by name: surge and sway forces [N], yaw torque [N m].
-THRUSTERS = ("thruster_surge", "thruster_sway", "thruster_yaw")
+#: The hull's thrusters by name: surge, sway and heave forces [N], pitch and yaw
+#: torques [N m].
+THRUSTERS = ("thruster_surge", "thruster_sway", "thruster_heave", "thruster_pitch",
+             "thruster_yaw")
 
 
 class VehicleMotion(NamedTuple):

@@ -127,7 +127,7 @@ def simulate(world: LinkWorld, sensor: IrradianceSensor, seconds: float,
              torque: Callable[[float], float] | None = None,
              disturbances: Sequence = (),
              controller: Callable[[SensorReading, float], float] | None = None,
-             progress: bool = False) -> SimulationResult:
+             progress: bool = False, vehicle=None) -> SimulationResult:
     """Run the world for ``seconds`` at the control period Te.
 
     Args:
@@ -138,6 +138,8 @@ def simulate(world: LinkWorld, sensor: IrradianceSensor, seconds: float,
             ``reset`` for this run.
         controller: ``controller(reading, t) -> torque`` for closed-loop runs.
         progress: show a progress bar.
+        vehicle: a :class:`~ledsim.physics.vehicle.Vehicle` that senses, navigates and
+            keeps station each step (None: the hull only feels the disturbances).
     """
     Te = world.config.constants.Te
     n = int(round(seconds / Te))
@@ -149,7 +151,7 @@ def simulate(world: LinkWorld, sensor: IrradianceSensor, seconds: float,
     hull = np.empty((n, 3))
     power = np.empty((n, 2)) if controller else None
     t0 = world.time
-    prepare(world, disturbances, t0)
+    prepare(world, disturbances, t0, vehicle)
     for k in tqdm(range(n), disable=not progress, desc="simulate", leave=False,
                   file=sys.stderr):
         t = t0 + k * Te
@@ -165,7 +167,7 @@ def simulate(world: LinkWorld, sensor: IrradianceSensor, seconds: float,
             u = controller(r, t)
         gimbal[k] = world.gimbal_angle, world.gimbal_rate
         hull[k] = world.hull_pos
-        applied[k] = advance(world, disturbances, u, t0 + (k + 1) * Te)
+        applied[k] = advance(world, disturbances, u, t0 + (k + 1) * Te, vehicle)
     clean = sensor.clean_power(geo[:, 0], geo[:, 1], geo[:, 2], geo[:, 3])
     if power is None:
         power = clean + sensor.rng.standard_normal(clean.shape) * sensor.noise_std

@@ -18,6 +18,7 @@ hull_pos, hull_yaw       AUV position and heading                    m, rad
 hull_velocity            (angular, linear) velocity of the hull      rad/s, m/s
 vehicle_motion           IMU, DVL, encoder, position (noise-free)    SI
 add_hull_wrench          force and torque on the hull this step      N, N m
+set_thrust, thrust       surge, sway, heave; pitch, yaw thrusters    N; N m
 set_current              water velocity (MuJoCo's medium velocity)   m/s
 set_transmitter          LED platform pose and velocity              m, rad, m/s
 set_occluder             occluder plate position                     m
@@ -34,7 +35,7 @@ from contextlib import contextmanager
 import mujoco
 import numpy as np
 
-from . import scene
+from .hull import HullAccess
 from .scene import SCENE, SceneIds, WorldConfig, WorldError, build_spec, set_buoyancy
 
 __all__ = ["LinkWorld", "WorldConfig", "WorldError", "SCENE"]
@@ -47,8 +48,7 @@ _log = logging.getLogger("ledsim.mujoco")
 
 
 def _route_mujoco_warnings() -> None:
-    """Send MuJoCo's warnings to Python logging instead of MUJOCO_LOG.TXT in the working
-    folder (only if nobody installed a handler before)."""
+    """MuJoCo's warnings to Python logging, not MUJOCO_LOG.TXT (unless already routed)."""
     if mujoco.get_mju_user_warning() is None:
         mujoco.set_mju_user_warning(_on_mujoco_warning)
 
@@ -59,7 +59,7 @@ def _on_mujoco_warning(msg: str) -> None:
     _log.log(level, "MuJoCo: %s", msg.strip())
 
 
-class LinkWorld:
+class LinkWorld(HullAccess):
     """The compiled scene plus named accessors; see the module docstring."""
 
     def __init__(self, config: WorldConfig | None = None, *,
@@ -220,49 +220,6 @@ class LinkWorld:
         mujoco.mj_multiRay(self.model, self.data, origin, directions.ravel(), RAY_GROUPS, 1,
                            self._gimbal, geom, dist, None, n, max_length)
         return dist
-
-    # -- the hull --------------------------------------------------------------------------
-
-    @property
-    def hull_pos(self) -> np.ndarray:
-        return self.data.xpos[self._auv]
-
-    @property
-    def hull_yaw(self) -> float:
-        """Heading of the AUV about world z [rad]."""
-        R = self.data.xmat[self._auv]
-        return math.atan2(R[3], R[0])
-
-    def hull_velocity(self) -> np.ndarray:
-        """(angular, linear) velocity of the hull in the world frame, shape (6,)."""
-        return self._velocity(mujoco.mjtObj.mjOBJ_BODY, self._auv)
-
-    def vehicle_motion(self) -> scene.VehicleMotion | None:
-        """The vehicle's own sensors, noise-free, at the current state (None: the scene
-        has none); :class:`~ledsim.physics.navigation.NavigationSensor` adds the noise."""
-        adr = self.ids.vehicle_sensors
-        if adr is None:
-            return None
-        m, d = self.model, self.data
-        mujoco.mj_sensorPos(m, d)  # writes sensordata only: the dynamics are untouched
-        mujoco.mj_sensorVel(m, d)
-        s, (g, a, v, e, p) = d.sensordata, adr
-        return scene.VehicleMotion(s[g:g + 3].copy(), s[a:a + 3].copy(), s[v:v + 3].copy(),
-                             float(s[e]), s[p:p + 3].copy())
-
-    def clear_hull_wrench(self) -> None:
-        """Remove the external force and torque on the hull (start of a control step)."""
-        self.data.xfrc_applied[self._auv] = 0.0
-
-    def add_hull_wrench(self, force=(0.0, 0.0, 0.0), torque=(0.0, 0.0, 0.0)) -> None:
-        """Add a force [N] and torque [N m] (world frame, at the hull's centre of mass)."""
-        xfrc = self.data.xfrc_applied[self._auv]
-        xfrc[:3] += force
-        xfrc[3:] += torque
-
-    def set_hull_buoyancy(self, fraction: float) -> None:
-        """Share of the hull's weight carried by buoyancy (1: neutrally buoyant) [-]."""
-        self.model.body_gravcomp[self._auv] = fraction
 
     # -- water and the other bodies --------------------------------------------------------
 

@@ -1,0 +1,111 @@
+"""The hull's part of :class:`~ledsim.physics.world.LinkWorld`: its pose and velocity,
+its own sensors (MuJoCo's gyro, accelerometer, velocimeter, jointpos, framepos), its
+thrusters, and the external wrench the disturbances put on it."""
+
+from __future__ import annotations
+
+import math
+
+import mujoco
+import numpy as np
+
+from .scene import VehicleMotion
+
+
+class HullAccess:
+    """Accessors of the AUV's hull, mixed into ``LinkWorld`` (which gives ``model``,
+    ``data``, ``ids`` and ``_velocity``)."""
+
+    @property
+    def hull_pos(self) -> np.ndarray:
+        return self.data.xpos[self.ids.hull_body]
+
+    @property
+    def hull_yaw(self) -> float:
+        """Heading of the AUV about world z [rad]."""
+        R = self.data.xmat[self.ids.hull_body]
+        return math.atan2(R[3], R[0])
+
+    def hull_velocity(self) -> np.ndarray:
+        """(angular, linear) velocity of the hull in the world frame, shape (6,)."""
+        return self._velocity(mujoco.mjtObj.mjOBJ_BODY, self.ids.hull_body)
+
+    def vehicle_motion(self) -> VehicleMotion | None:
+        """The vehicle's own sensors, noise-free, at the current state (None: the scene
+        has none); :class:`~ledsim.physics.navigation.NavigationSensor` adds the noise."""
+        adr = self.ids.vehicle_sensors
+        if adr is None:
+            return None
+        m, d = self.model, self.data
+        mujoco.mj_sensorPos(m, d)  # writes sensordata only: the dynamics are untouched
+        mujoco.mj_sensorVel(m, d)
+        s, (g, a, v, e, p) = d.sensordata, adr
+        return VehicleMotion(s[g:g + 3].copy(), s[a:a + 3].copy(), s[v:v + 3].copy(),
+                             float(s[e]), s[p:p + 3].copy())
+
+    def set_thrust(self, command) -> np.ndarray:
+        """Command the hull's surge, sway and heave thrust [N] and pitch and yaw torque
+        [N m] (hull frame), each clipped at its thruster's limit. Returns what was
+        applied."""
+        ids, m = self.ids.thrusters, self.model
+        lo, hi = m.actuator_ctrlrange[list(ids)].T
+        self.data.ctrl[list(ids)] = np.clip(np.asarray(command, dtype=float), lo, hi)
+        return self.thrust
+
+    @property
+    def thrust(self) -> np.ndarray:
+        """The thrusters' commands: surge, sway, heave [N], pitch and yaw [N m] (zeros:
+        none)."""
+        ids = self.ids.thrusters
+        return np.zeros(5) if ids is None else self.data.ctrl[list(ids)].copy()
+
+    def clear_hull_wrench(self) -> None:
+        """Start a control step's external wrench on the hull: buoyancy's righting moment
+        only, ``B BG (z_hull x z_world)`` (B: the buoyancy [N], BG: the metacentric
+        height [m]), which MuJoCo's gravity compensation at the centre of mass lacks."""
+        hull = self.ids.hull_body
+        m = self.model
+        buoyancy = m.body_mass[hull] * m.body_gravcomp[hull] * float(np.linalg.norm(
+            m.opt.gravity))
+        z_hull = self.data.xmat[hull].reshape(3, 3)[:, 2]
+        xfrc = self.data.xfrc_applied[hull]
+        xfrc[:3] = 0.0
+        xfrc[3:] = buoyancy * self.config.metacentric_height * np.cross(z_hull,
+                                                                    (0.0, 0.0, 1.0))
+
+    def add_hull_wrench(self, force=(0.0, 0.0, 0.0), torque=(0.0, 0.0, 0.0)) -> None:
+        """Add a force [N] and torque [N m] (world frame, at the hull's centre of mass)."""
+        xfrc = self.data.xfrc_applied[self.ids.hull_body]
+        xfrc[:3] += force
+        xfrc[3:] += torque
+
+    def set_hull_buoyancy(self, fraction: float) -> None:
+        """Share of the hull's weight carried by buoyancy (1: neutrally buoyant) [-]."""
+        self.model.body_gravcomp[self.ids.hull_body] = fraction
+
+    @property
+    def hull_rotation(self) -> np.ndarray:
+        """The hull's frame in the world, 3x3 (columns: its axes)."""
+        return self.data.xmat[self.ids.hull_body].reshape(3, 3).copy()
+
+    def site_in_hull(self, name: str) -> tuple[np.ndarray, np.ndarray]:
+        """A site's frame (3x3) and position [m] in the hull's frame: the lever arms a
+        vehicle knows from its drawings."""
+        R = self.hull_rotation
+        site = self.model.site(name).id
+        frame = R.T @ self.data.site_xmat[site].reshape(3, 3)
+        return frame, R.T @ (self.data.site_xpos[site] - self.hull_pos)
+
+    def gimbal_in_hull(self) -> np.ndarray:
+        """The gimbal hinge's position in the hull's frame [m]."""
+        return self.hull_rotation.T @ (self.data.xpos[self.ids.gimbal_body] - self.hull_pos)
+
+    def hull_inertia(self) -> np.ndarray:
+        """The hull's mass [kg] (surge, sway, heave) and pitch and yaw inertia [kg m^2],
+        the gimbal included (MuJoCo's mass matrix at the current pose): what its
+        designer knows."""
+        mujoco.mj_forward(self.model, self.data)
+        M = np.zeros((self.model.nv, self.model.nv))
+        mujoco.mj_fullM(self.model, self.data, M)
+        dof = self.model.jnt_dofadr[self.model.body_jntadr[self.ids.hull_body]]
+        return np.diag(M)[[dof, dof + 1, dof + 2, dof + 4, dof + 5]].copy()
