@@ -16,7 +16,8 @@ SHORT_SPECS = {"occlusion": "occlusion:start=0.3,duration=0.3",
                "current": "current:speed=0.1,gust=0.05",
                "vibration": "vibration:frequency=3,torque=1,force=4",
                "transmitter": "transmitter:sway=0.01,frequency=1,yaw=0.05",
-               "kick": "kick:start=0.5,rate=2"}
+               "kick": "kick:start=0.5,rate=2",
+               "waves": "waves:height=0.5,period=6"}
 
 
 def test_every_disturbance_has_a_short_spec():

@@ -15,6 +15,7 @@ from pathlib import Path
 from ..config import PAPER_DISTANCE
 from ..errors import LedsimError
 from ..outputs import check_out_dir, check_out_file, output_folder, save_checkpoint
+from .checks import _check_vehicle, _vehicle, _warn_unserved
 
 log = logging.getLogger("ledsim")
 
@@ -27,23 +28,12 @@ def _loop_config(args, **given):
     from ..loop.config import PARTS, RunConfig
 
     values = {**vars(args), "disturbances": tuple(args.disturbance),
-              "supervision": not args.no_supervision, **given}
+              "supervision": not args.no_supervision, **_vehicle(args), **given}
     parts = {name: kind(**{f.name: values[f.name] for f in fields(kind) if f.name in values})
              for name, kind in PARTS.items()}
     cfg = RunConfig.of(**parts)
     cfg.validate()
     return cfg
-
-
-def _warn_unserved(cfg) -> None:
-    """Say so when the shipped KKL runs at a distance it is not measured to serve."""
-    from ..loop.estimation import SERVED_DISTANCES, served
-
-    if not served(cfg):
-        lo, hi = SERVED_DISTANCES
-        log.warning(f"--distance {cfg.distance:g} is outside the {lo:g}-{hi:g} m the shipped "
-                    "KKL is measured to serve: its results are not vouched for "
-                    "(results.json: distance_served false)")
 
 
 def simulate(args) -> int:
@@ -92,6 +82,7 @@ def run(args) -> int:
 
     cfg = _loop_config(args)
     out = check_out_dir(args.out)
+    _check_vehicle(cfg)
     _warn_unserved(cfg)
     if cfg.steady_from < cfg.scenario_spec.steady_from:
         log.info(f"a {cfg.run_seconds:g} s run is shorter than the steady-state window "
@@ -121,9 +112,12 @@ def demo(args) -> int:
     rows, summaries = [], []
     with output_folder(out) as tmp:
         for est in LOOP_ESTIMATORS:
-            summary, trace = run_many(RunConfig(scenario="align", estimator=est,
-                                                seeds=args.seeds, scene=args.scene),
-                                      progress=not args.quiet)
+            cfg = RunConfig(scenario="align", estimator=est, seeds=args.seeds,
+                            scene=args.scene, **_vehicle(args))
+            cfg.validate()
+            if est == LOOP_ESTIMATORS[0]:
+                _check_vehicle(cfg)
+            summary, trace = run_many(cfg, progress=not args.quiet)
             write_run(summary, trace, tmp / est)
             summaries.append(summary)
             rows.append(format_summary(summary))
@@ -131,20 +125,20 @@ def demo(args) -> int:
         atomic_write_text(tmp / "table.md", TABLE_HEADER + "\n" + "\n".join(rows) + "\n")
         write_json(tmp / "results.json", summaries)
         if not args.no_video:
-            _demo_video(tmp, args.scene, not args.quiet)
+            _demo_video(tmp, args.scene, not args.quiet, _vehicle(args))
     log.info(f"wrote {out}/table.md, results.json, <estimator>/run.png"
              f"{'' if args.no_video else ', alignment.mp4, alignment.png'} in "
           f"{time.perf_counter() - t0:.0f} s")
     return 0
 
 
-def _demo_video(out: Path, scene: str | None, progress: bool) -> None:
+def _demo_video(out: Path, scene: str | None, progress: bool, vehicle: dict) -> None:
     """A short video of the KKL-driven alignment with an occlusion, and a still frame."""
     from ..loop.config import RunConfig
     from ..loop.video import VideoSpec, check_video, render_video
 
     cfg = RunConfig(scenario="align", estimator="kkl", seconds=5.0, scene=scene,
-                    disturbances=("occlusion:start=3,duration=0.5",))
+                    disturbances=("occlusion:start=3,duration=0.5",), **vehicle)
     check_video(cfg, VideoSpec())
     frames = render_video(cfg, 0, out / "alignment.mp4", VideoSpec(),
                           still=out / "alignment.png", progress=progress)
@@ -161,6 +155,7 @@ def render(args) -> int:
     from ..loop.video import VideoSpec, check_video, render_video
 
     cfg = _loop_config(args, seconds=args.seconds)
+    _check_vehicle(cfg)
     spec = VideoSpec(args.width, args.height, args.fps, args.camera)
     check_video(cfg, spec)
     t0 = time.perf_counter()
@@ -223,7 +218,10 @@ def sweep(args) -> int:
         raise LedsimError("--address needs --backend ray")
     base = RunConfig(scenario=args.scenario, torque_limit=args.torque_limit,
                      particles=args.particles, seconds=args.seconds, scene=args.scene,
-                     supervision=not args.no_supervision, integrator=args.integrator)
+                     supervision=not args.no_supervision, integrator=args.integrator,
+                     **_vehicle(args))
+    base.validate()
+    _check_vehicle(base)
     grid = SweepGrid(estimators=args.estimator or ["kkl"],
                      disturbances=args.disturbance or ["none"],
                      distances=args.distance or [PAPER_DISTANCE],

@@ -70,6 +70,19 @@ def _add_run_knobs(p) -> None:
                    help="particle-filter size")
 
 
+def _add_vehicle_args(p) -> None:
+    """The vehicle's flags (run, render, sweep, demo)."""
+    p.add_argument("--no-imu", action="store_true",
+                   help="the control step uses the photodiodes and the gimbal torque only, "
+                   "as in the paper: no IMU, DVL or encoder feed-forward")
+    p.add_argument("--no-station-keeping", action="store_true",
+                   help="the vehicle's thrusters stay idle: the hull drifts with the water")
+    p.add_argument("--imu-noise", action="append", default=[], metavar="KEY=VALUE",
+                   help="a noise figure of the vehicle's sensors (ledsim.config."
+                   "NavigationNoise: gyro_noise_density, dvl_noise, fix_noise, ...; "
+                   "repeatable or comma-joined)")
+
+
 def _add_loop_args(p) -> None:
     from ..loop.config import LOOP_ESTIMATORS, PHYSICS_SCENARIOS, EstimatorPart, TaskPart
     from ..physics.disturbances import DISTURBANCES
@@ -91,6 +104,7 @@ def _add_loop_args(p) -> None:
                    help="no loss detection, gain tracking or reacquisition scan: the "
                    "estimator alone drives the motor (and the KKL is the shipped one of "
                    "--distance)")
+    _add_vehicle_args(p)
     _add_world_args(p)
 
 
@@ -240,6 +254,7 @@ def build_parser() -> argparse.ArgumentParser:
     _add_run_knobs(sw)
     sw.add_argument("--no-supervision", action="store_true",
                     help="no loss detection or reacquisition (see ledsim run)")
+    _add_vehicle_args(sw)
     _add_scene_args(sw)
     sw.add_argument("--backend", default="local", **_choices(BACKENDS),
                     help="local processes, or Ray (pip install 'ledsim[ray]')")
@@ -257,4 +272,5 @@ def build_parser() -> argparse.ArgumentParser:
     dm.add_argument("--out", default="out/demo", help="output folder")
     dm.add_argument("--scene", help="MJCF scene file (default: the shipped led_link.xml)")
     dm.add_argument("--no-video", action="store_true", help="skip the rendered video")
+    _add_vehicle_args(dm)
     return p

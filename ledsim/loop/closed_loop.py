@@ -68,7 +68,8 @@ def start_world(cfg: RunConfig, system: GimbalSystem, world: LinkWorld, seed: in
         d.reset(seed)
     vehicle = None
     if cfg.imu or world.ids.vehicle_sensors is not None:
-        vehicle = Vehicle(world, system.Te, seed, cfg.distance, cfg.station_keeps)
+        vehicle = Vehicle(world, system.Te, seed, cfg.distance, cfg.station_keeps,
+                          noise=cfg.world.navigation_noise())
     prepare(world, disturbances, world.time, vehicle)
     return Surroundings(sensor, disturbances, vehicle)
 

@@ -15,7 +15,7 @@ from __future__ import annotations
 import math
 from dataclasses import asdict, dataclass, fields
 
-from ..config import PAPER_DISTANCE, LinkConstants
+from ..config import PAPER_DISTANCE, LinkConstants, NavigationNoise
 from ..control import AlignmentPID, Excitation, PaperRateDamping
 from ..errors import LedsimError
 from ..estimators import ESTIMATORS
@@ -44,6 +44,26 @@ OMEGA_MODELS = ("identified", "simulator", "none")
 FILTER_DISTANCES = ("configured", "nominal")
 
 
+def navigation_noise(settings: tuple[str, ...]) -> NavigationNoise:
+    """:class:`~ledsim.config.NavigationNoise` with ``key=value`` ``settings`` applied;
+    a bad key or value raises :class:`LedsimError` naming it."""
+    names = [f.name for f in fields(NavigationNoise)]
+    values = {}
+    for item in settings:
+        key, eq, text = item.partition("=")
+        if not eq or key not in names:
+            raise LedsimError(f"--imu-noise {item!r} is not allowed: use key=value with key "
+                              f"in {', '.join(names)}")
+        try:
+            values[key] = int(text) if key == "encoder_bits" else float(text)
+        except ValueError:
+            raise LedsimError(f"--imu-noise {item!r}: {text!r} is not a number") from None
+    try:
+        return NavigationNoise(**values)
+    except LedsimError as e:
+        raise LedsimError(f"--imu-noise: {e}") from None
+
+
 @dataclass(frozen=True)
 class WorldPart:
     """The MuJoCo world of an experiment.
@@ -56,6 +76,9 @@ class WorldPart:
         integrator: MuJoCo integrator of the world (``implicitfast``, ``euler``, ...).
         station_keeping: the vehicle holds its pose on its thrusters, from its own
             navigation (:class:`~ledsim.physics.vehicle.Vehicle`); off: it drifts.
+        imu_noise: ``key=value`` settings of the vehicle's sensors' noise
+            (:class:`~ledsim.config.NavigationNoise`'s fields; the rest keep their
+            datasheet figures).
     """
 
     distance: float = PAPER_DISTANCE
@@ -64,6 +87,11 @@ class WorldPart:
     scene: str | None = None
     integrator: str = "implicitfast"
     station_keeping: bool = True
+    imu_noise: tuple[str, ...] = ()
+
+    def navigation_noise(self) -> NavigationNoise:
+        """The vehicle's sensors' noise: the defaults with ``imu_noise`` applied."""
+        return navigation_noise(self.imu_noise)
 
     def world_config(self, distance: float | None = None) -> WorldConfig:
         """The MuJoCo world (at ``distance`` [m] instead, when given); its control period
@@ -172,6 +200,7 @@ class RunConfig:
     filter_distance: str = EstimatorPart.filter_distance
     station_keeping: bool = WorldPart.station_keeping
     imu: bool = EstimatorPart.imu
+    imu_noise: tuple[str, ...] = WorldPart.imu_noise
 
     @classmethod
     def of(cls, world: WorldPart = WorldPart(), task: TaskPart = TaskPart(),
@@ -210,6 +239,7 @@ class RunConfig:
             if not (ok and math.isfinite(value)):
                 raise LedsimError(f"{flag} {value!r} is not allowed: must be {allowed}")
         check_timing([parse_disturbance(d) for d in self.disturbances], self.run_seconds)
+        navigation_noise(self.imu_noise)
 
     @property
     def scenario_spec(self) -> Scenario:

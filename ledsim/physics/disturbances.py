@@ -10,6 +10,7 @@ name              what it does
 ================  ============================================================
 vibration         sinusoidal yaw torque and sway force on the AUV hull
 current           water current: steady velocity plus random gusts (opt.wind)
+waves             the orbital velocity of surface waves at the vehicle's depth
 transmitter       the LED platform sways sideways and rotates (yaw)
 occlusion         a plate crosses the line of sight for ``duration`` seconds
 kick              an angular-rate impulse to the gimbal or the hull at ``start``
@@ -23,32 +24,9 @@ from dataclasses import dataclass, fields
 
 import numpy as np
 
-from ..errors import LedsimError
+from .disturbance_base import Disturbance, DisturbanceError  # noqa: F401 (re-exported)
+from .water import WaterCurrent, Waves
 from .world import LinkWorld
-
-
-class DisturbanceError(LedsimError):
-    """Unknown disturbance name or bad parameter."""
-
-
-class Disturbance:
-    """Base of every disturbance: seeded at the start of a run, applied every step."""
-
-    def reset(self, seed: int) -> None:
-        """Start of a run with seed ``seed`` (disturbances with random parts reseed)."""
-
-    def apply(self, world: LinkWorld, t: float) -> None:
-        raise NotImplementedError
-
-    #: It changes the world's model (not only its state), so worlds that run it side by
-    #: side cannot share one compiled model.
-    changes_model = False
-
-    @property
-    def event_end(self) -> float | None:
-        """Time [s] at which a transient event (an occlusion) ends, after which the loop
-        should recover; None for disturbances that last the whole run."""
-        return None
 
 
 @dataclass
@@ -71,54 +49,6 @@ class HullVibration(Disturbance):
     def apply(self, world: LinkWorld, t: float) -> None:
         s = math.cos(2 * math.pi * self.frequency * t)
         world.add_hull_wrench(force=(0.0, self.force * s, 0.0), torque=(0.0, 0.0, self.torque * s))
-
-
-@dataclass
-class WaterCurrent(Disturbance):
-    """Water current through MuJoCo's medium velocity (``opt.wind``).
-
-    A free-floating AUV would simply drift away with the water (0.3 m/s is 3 m in 10 s,
-    far more than the 8.5 cm link); the vehicle's station keeping
-    (:class:`~ledsim.physics.vehicle.Vehicle`, on by default in every scenario) holds it
-    on its thrusters, from its own navigation. ``hold=0`` turns that off for the run:
-    the hull drifts with the water.
-
-    Attributes:
-        speed: steady current speed [m/s].
-        heading: direction of the current in the horizontal plane [rad] (0 = +x).
-        gust: standard deviation of the gusts [m/s] (Ornstein-Uhlenbeck process).
-        gust_time: correlation time of the gusts [s].
-        hold: 1 = the vehicle keeps station, 0 = it drifts with the water.
-        seed: seed of the gusts.
-    """
-
-    changes_model = True  # the medium velocity is a model option
-
-    speed: float = 0.2
-    heading: float = math.pi / 2
-    gust: float = 0.05
-    gust_time: float = 1.0
-    hold: float = 1.0
-    seed: int = 0
-
-    def __post_init__(self):
-        self.reset(self.seed)
-
-    def reset(self, seed: int) -> None:
-        self.seed = seed
-        self._rng = np.random.default_rng(seed)
-        self._g = np.zeros(3)
-        self._last_t = None
-
-    def apply(self, world: LinkWorld, t: float) -> None:
-        dt = 0.0 if self._last_t is None else t - self._last_t
-        self._last_t = t
-        if dt > 0 and self.gust > 0:
-            a = math.exp(-dt / self.gust_time)
-            self._g = a * self._g + self.gust * math.sqrt(1 - a * a) * \
-                self._rng.standard_normal(3) * np.array([1.0, 1.0, 0.3])
-        steady = self.speed * np.array([math.cos(self.heading), math.sin(self.heading), 0.0])
-        world.set_current(steady + self._g)
 
 
 @dataclass
@@ -198,6 +128,9 @@ RANGES = {
     "duration": (0.0, 3600.0, "s", True),
     "drift": (-0.05, 0.05, "m/s", False),
     "drift_until": (0.0, 3600.0, "s", False),
+    "height": (0.0, 20.0, "m", False),
+    "period": (1.0, 30.0, "s", False),
+    "depth": (1.0, 500.0, "m", False),
 }
 
 @dataclass
@@ -235,6 +168,7 @@ class Kick(Disturbance):
 DISTURBANCES = {
     "vibration": HullVibration,
     "current": WaterCurrent,
+    "waves": Waves,
     "transmitter": TransmitterMotion,
     "occlusion": Occlusion,
     "kick": Kick,

@@ -40,7 +40,8 @@ class NavigationReading:
     docstring): gyro (3,) [rad/s] and accel (3,) [m/s^2] in the IMU frame, dvl (3,)
     [m/s] in the DVL frame, encoder [rad], position_fix (3,) [m] in the world frame or
     None when no fix arrived this step, depth [m] of the IMU below its start, positive
-    down (a pressure sensor)."""
+    down (a pressure sensor), dvl_fresh: the DVL pinged this step, dvl_gyro: the gyro's
+    reading at the DVL's last ping (to take the lever arm off that ping's velocity)."""
 
     gyro: np.ndarray
     accel: np.ndarray
@@ -48,6 +49,8 @@ class NavigationReading:
     encoder: float
     position_fix: np.ndarray | None
     depth: float = 0.0
+    dvl_fresh: bool = True
+    dvl_gyro: np.ndarray | None = None
 
 
 class NavigationSensor:
@@ -101,12 +104,15 @@ class NavigationSensor:
         self.gyro_bias = self._drift(self.gyro_bias, self._decay[0], n.gyro_bias_instability)
         self.accel_bias = self._drift(self.accel_bias, self._decay[1],
                                       n.accel_bias_instability)
-        if self._due(n.dvl_rate) or self._dvl is None:
+        fresh = self._due(n.dvl_rate) or self._dvl is None
+        if fresh:
             self._dvl = truth.dvl + rng.standard_normal(3) * n.dvl_noise
+            self._dvl_gyro = gyro.copy()
         fix = truth.position + rng.standard_normal(3) * n.fix_noise \
             if self._due(n.fix_rate) else None
         step = n.encoder_step
         encoder = step * math.floor(truth.encoder / step + 0.5)
         depth = self.surface - truth.position[2] + rng.standard_normal() * n.depth_noise
         self.k += 1
-        return NavigationReading(gyro, accel, self._dvl.copy(), encoder, fix, float(depth))
+        return NavigationReading(gyro, accel, self._dvl.copy(), encoder, fix, float(depth),
+                                 fresh, self._dvl_gyro.copy())

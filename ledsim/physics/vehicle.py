@@ -77,12 +77,14 @@ class StationKeeping:
 
     Attributes:
         kp [N/m], kd [N s/m]: surge, sway and heave PD on position and velocity.
-        kp_yaw [N m/rad], kd_yaw [N m s/rad]: pitch and heading PD.
+        kp_pitch, kp_yaw [N m/rad], kd_pitch, kd_yaw [N m s/rad]: pitch and heading PD.
         observer_time: time constant of the disturbance observer [s].
     """
 
     kp: float = 15.0
     kd: float = 40.0
+    kp_pitch: float = 40.0
+    kd_pitch: float = 20.0
     kp_yaw: float = 40.0
     kd_yaw: float = 20.0
     observer_time: float = 0.1
@@ -122,7 +124,7 @@ class Vehicle:
         self.sensor = NavigationSensor(world, Te, seed, noise)
         self.station_keeping = station_keeping and world.ids.thrusters is not None
         self.gains = gains
-        self.k_velocity = min(1.0, Te / velocity_time)
+        self.k_velocity = min(1.0, 1.0 / (self.sensor.noise.dvl_rate * velocity_time))
         self.attitude = world.hull_rotation  # hull frame in the world, from the gyro
         self.R_dvl, self.l_dvl = world.site_in_hull("dvl")
         self.l_gimbal = world.gimbal_in_hull()
@@ -152,13 +154,15 @@ class Vehicle:
         """Sense, navigate, measure the line of sight and drive the thrusters at ``t``."""
         r = self.reading = self.sensor.read()
         omega = r.gyro
-        nav = self.navigation.update(omega, r.dvl, r.position_fix)
-        self.attitude = _rotate(self.attitude, omega, self.Te)
+        self.attitude = _rotate(self.attitude, 0.5 * (omega + self._omega) if self.k
+                                else omega, self.Te)
         # The accelerometer reads gravity's reaction too: take it off with the attitude.
         a = r.accel - self.attitude.T @ np.array([0.0, 0.0, 9.81])
-        v_dvl = self.R_dvl @ r.dvl - np.cross(omega, self.l_dvl)
-        v = self.velocity + self.Te * (a - np.cross(omega, self.velocity))
-        self.velocity = v + self.k_velocity * (v_dvl - v)
+        self.velocity = self.velocity + self.Te * (a - np.cross(omega, self.velocity))
+        if r.dvl_fresh:  # a ping: blend it in, its lever arm at the ping's rate
+            v_dvl = self.R_dvl @ r.dvl - np.cross(r.dvl_gyro, self.l_dvl)
+            self.velocity += self.k_velocity * (v_dvl - self.velocity)
+        nav = self.navigation.update(omega, r.dvl, r.position_fix, velocity=self.velocity)
         v_g = self.velocity + np.cross(omega, self.l_gimbal)
         c, s = math.cos(r.encoder), math.sin(r.encoder)
         raw = (-c * v_g[1] + s * v_g[0]) / self.distance
@@ -192,6 +196,6 @@ class Vehicle:
         err = np.array([c * dp[0] + s * dp[1], -s * dp[0] + c * dp[1], height, pitch,
                         math.remainder(heading - self.home[1], 2 * math.pi)])
         rate = np.array([*self.velocity, omega[1], omega[2]])
-        kp = np.array([g.kp, g.kp, g.kp, g.kp_yaw, g.kp_yaw])
-        kd = np.array([g.kd, g.kd, g.kd, g.kd_yaw, g.kd_yaw])
+        kp = np.array([g.kp, g.kp, g.kp, g.kp_pitch, g.kp_yaw])
+        kd = np.array([g.kd, g.kd, g.kd, g.kd_pitch, g.kd_yaw])
         return -kp * err - kd * rate

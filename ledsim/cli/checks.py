@@ -1,0 +1,45 @@
+"""Checks and notes a command makes before it runs: the vehicle's flags and scene, and
+a distance the shipped KKL does not serve."""
+
+from __future__ import annotations
+
+import logging
+
+from ..errors import LedsimError
+
+log = logging.getLogger("ledsim")
+
+
+def _vehicle(args) -> dict:
+    """The vehicle's part of a command line: IMU, station keeping, sensor noise."""
+    return {"imu": not args.no_imu, "station_keeping": not args.no_station_keeping,
+            "imu_noise": tuple(item for spec in args.imu_noise
+                               for item in spec.split(",") if item)}
+
+
+def _check_vehicle(cfg) -> None:
+    """A user's scene without the vehicle's sensors: refused with the IMU on, and said
+    once with ``--no-imu`` (the run then has no station keeping)."""
+    if cfg.scene is None:
+        return
+    from ..physics.scene import VEHICLE_SENSORS
+    from ..physics.world import LinkWorld
+
+    if LinkWorld(cfg.world_config()).ids.vehicle_sensors is not None:
+        return
+    if cfg.imu:
+        raise LedsimError(f"the scene {cfg.scene} has no IMU, DVL, encoder or position-fix "
+                          f"sensor ({', '.join(VEHICLE_SENSORS)}): run it with --no-imu")
+    log.warning(f"the scene {cfg.scene} has no vehicle sensors: no IMU and no station "
+                "keeping (the hull drifts with the water)")
+
+
+def _warn_unserved(cfg) -> None:
+    """Say so when the shipped KKL runs at a distance it is not measured to serve."""
+    from ..loop.estimation import SERVED_DISTANCES, served
+
+    if not served(cfg):
+        lo, hi = SERVED_DISTANCES
+        log.warning(f"--distance {cfg.distance:g} is outside the {lo:g}-{hi:g} m the shipped "
+                    "KKL is measured to serve: its results are not vouched for "
+                    "(results.json: distance_served false)")
