@@ -48,6 +48,13 @@ def render_video(cfg: RunConfig, seed: int, out: Path, spec: VideoSpec,
             status = ("scanning" if d.acquiring else "lost" if d.lost
                       else "converging" if d.reason == "converging"
                       else "dropout" if run.step.gate.held.any() else "ok")
+        w = run.world
+        offset = (w.hull_pos - w.initial_hull_pos) * 1e3
+        thrust = w.thrust
+        recorder[0].overlay.vehicle = (
+            f"IMU {'on' if cfg.imu else 'off'} | hull {offset[0]:+.1f}, {offset[1]:+.1f}, "
+            f"{offset[2]:+.1f} mm, yaw {w.hull_yaw * 1e3:+.1f} mrad | thrust "
+            f"{thrust[0]:+.0f}, {thrust[1]:+.0f}, {thrust[2]:+.0f} N, yaw {thrust[4]:+.1f} N m")
         recorder[0](t, run.world, run.reading, run.step.decision.xhat, status=status)
 
     ok = False

@@ -61,6 +61,7 @@ class Overlay:
             self.font = ImageFont.load_default()
 
     status = ""
+    vehicle = ""  # a line on the vehicle (IMU, hull offset, thrust) under the time
 
     def push(self, phi: float, phihat: float, p1: float, p2: float) -> None:
         for q, v in ((self.phi, phi), (self.phihat, phihat), (self.p1, p1), (self.p2, p2)):
@@ -91,6 +92,8 @@ class Overlay:
         d.text((half + 8, y0 + 4), "power [W]: P1 (blue), P2 (orange)", fill=TEXT,
                font=self.font)
         d.text((8, 6), f"t = {t:5.2f} s   {self.label}", fill=(255, 255, 255), font=self.font)
+        if self.vehicle:
+            d.text((8, 10 + self.font_px), self.vehicle, fill=TEXT, font=self.font)
         if self.status in STATUS_BADGES:
             text, colour = STATUS_BADGES[self.status]
             x0 = self.w - 8 - d.textlength(text, font=self.font) - 12

@@ -7,7 +7,10 @@ frame shows:
 - the AUV, the gimbal and the transmitter in a fogged, water-tinted scene;
 - one beam per photodiode from the LED: cyan with an opacity that follows the received
   power, cut short and turned red where a body blocks it;
-- a panel with the time, true vs estimated phi, and the two powers.
+- orange arrows above the yoke for the thrusters' surge, sway and heave effort (2 mm
+  per newton, from a point the side camera sees);
+- a panel with the time, true vs estimated phi, the two powers, and a line on the
+  vehicle: IMU on or off, the hull's offset and heading, the thrust.
 """
 
 from __future__ import annotations
@@ -90,6 +93,25 @@ def add_beams(scene: mujoco.MjvScene, world: LinkWorld, reading: SensorReading,
                             np.eye(3).ravel(), rgba.astype(np.float32))
         mujoco.mjv_connector(geom, mujoco.mjtGeom.mjGEOM_CAPSULE, BEAM_WIDTH, led, end)
         geom.emission = 0.8
+        scene.ngeom += 1
+
+
+THRUST = np.array([1.0, 0.55, 0.1, 0.9])  # colour of the thrust arrows
+
+
+def add_thrust_arrows(scene: mujoco.MjvScene, world: LinkWorld) -> None:
+    """One arrow per linear thruster (surge, sway, heave), 2 mm per newton, from a point
+    above the yoke; none for a thruster at rest."""
+    R = world.hull_rotation
+    origin = world.hull_pos + R @ np.array([0.8, 0.0, 0.05])
+    for axis, force in enumerate(world.thrust[:3]):
+        if abs(force) < 0.5 or scene.ngeom >= scene.maxgeom:
+            continue
+        geom = scene.geoms[scene.ngeom]
+        mujoco.mjv_initGeom(geom, mujoco.mjtGeom.mjGEOM_ARROW, np.zeros(3), np.zeros(3),
+                            np.eye(3).ravel(), THRUST.astype(np.float32))
+        tip = origin + R[:, axis] * 0.002 * float(np.clip(force, -60.0, 60.0))
+        mujoco.mjv_connector(geom, mujoco.mjtGeom.mjGEOM_ARROW, 0.004, origin, tip)
         scene.ngeom += 1
 
 
@@ -180,6 +202,7 @@ class FrameRecorder:
         r.update_scene(self.world.data, camera=self.camera, scene_option=self.option)
         add_beams(r.scene, self.world, reading, blocking_points(self.world),
                   self.peak)
+        add_thrust_arrows(r.scene, self.world)
         frame = r.render()
         return self.overlay.draw(frame, t, self.peak)
 
