@@ -205,7 +205,6 @@ class ControlStep:
         self.warmup = warmup
         self.decision: Decision | None = None
         self.u = 0.0
-        self.los_angle = 0.0  # bearing the hull's motion has turned [rad]
         self._holding, self._last_command = False, 0.0
         self.load = None if model is None else LoadObserver(model)
         self._motor_u = 0.0  # the phi'' the motor gave last step [rad/s^2]
@@ -222,8 +221,7 @@ class ControlStep:
         if los is not None:  # the encoder in the line of sight's frame
             load = 0.0 if self.load is None else \
                 self.load.update(qdot + los.hull_rate, self._motor_u)
-            self.los_angle += self.constants.Te * los.incidence_rate
-            q, qdot = q - self.los_angle, qdot - los.incidence_rate
+            q, qdot = q - los.bearing, qdot - los.incidence_rate
         d = self.supervisor.step(t, self.gate(y), q, qdot)
         if d.reseeded:
             self.law = self.law_template.start(self.constants)

@@ -3,7 +3,8 @@
 Dead reckoning, corrected by the fixes (a complementary filter), in the horizontal
 plane of a vehicle that stays level:
 
-    heading     psi' = psi + Te (r + r_prev) / 2          r: the gyro's yaw rate
+    heading     psi' = psi + dpsi                        dpsi: the IMU's yaw increment
+                                                         (else Te (r + r_prev) / 2)
     velocity    v_b  = R_dvl d - omega x l_dvl            d: the DVL's reading, in its frame
                 v    = Rz(psi) v_b[:2]                    (the DVL sees the lever arm l_dvl)
     position    p'   = p + Te v,   and at a fix f:  p <- p + g (f - p)
@@ -52,7 +53,7 @@ class DeadReckoning:
         self.state = NavigationState(np.array(position, dtype=float)[:2], np.zeros(2),
                                      float(heading), 0.0)
 
-    def update(self, gyro, dvl, fix=None, velocity=None) -> NavigationState:
+    def update(self, gyro, dvl, fix=None, velocity=None, delta_yaw=None) -> NavigationState:
         """One period: the gyro (3,) [rad/s] and DVL (3,) [m/s] readings, and an acoustic
         fix of the position (3,) [m] when one arrived (else None). ``velocity``: the
         hull's velocity at the IMU in its own frame (3,) [m/s] from a better source
@@ -62,7 +63,8 @@ class DeadReckoning:
         rate_before, s.yaw_rate = s.yaw_rate, float(gyro[2])
         v_body = (self.R_dvl @ np.asarray(dvl, dtype=float) - np.cross(gyro, self.lever)
                   if velocity is None else np.asarray(velocity, dtype=float))
-        heading = s.heading + 0.5 * self.Te * (rate_before + s.yaw_rate)  # trapezoid
+        heading = s.heading + (0.5 * self.Te * (rate_before + s.yaw_rate)  # trapezoid
+                               if delta_yaw is None else float(delta_yaw))
         mid = 0.5 * (s.heading + heading)
         c, si = math.cos(mid), math.sin(mid)
         s.velocity = np.array([c * v_body[0] - si * v_body[1], si * v_body[0] + c * v_body[1]])

@@ -9,6 +9,12 @@ what a real unit adds (:class:`~ledsim.config.NavigationNoise`, figures and sour
 reading         noise                                                    unit
 ==============  =======================================================  ===========
 gyro            white (angle random walk) + a drifting bias             rad/s
+delta_angle     the orientation increment over the step (the IMU's       rad
+                strapdown output, as the MTi-1's DeltaQ), with the
+                same noise integrated over the step
+delta_velocity  the specific force integrated over the step, in the      m/s
+                IMU's frame (the MTi-1's DeltaV), with the
+                accelerometer's noise integrated over the step
 accel           white (velocity random walk) + a drifting bias          m/s^2
 dvl             white per ping; the last ping held between pings         m/s
 encoder         quantised to the encoder's step                          rad
@@ -32,6 +38,8 @@ from .world import LinkWorld, WorldError
 
 #: Added to the run's seed for the navigation sensors' own generator.
 SEED_OFFSET = 20_000
+#: What an accelerometer at rest reads: gravity's reaction, world frame [m/s^2].
+GRAVITY_REACTION = np.array([0.0, 0.0, 9.81])
 
 
 @dataclass
@@ -41,7 +49,11 @@ class NavigationReading:
     [m/s] in the DVL frame, encoder [rad], position_fix (3,) [m] in the world frame or
     None when no fix arrived this step, depth [m] of the IMU below its start, positive
     down (a pressure sensor), dvl_fresh: the DVL pinged this step, dvl_gyro: the gyro's
-    reading at the DVL's last ping (to take the lever arm off that ping's velocity)."""
+    reading at the DVL's last ping (to take the lever arm off that ping's velocity),
+    delta_angle (3,) [rad]: the IMU's orientation increment since the last step, in its
+    frame; delta_velocity (3,) [m/s]: the specific force integrated since the last
+    step, in its current frame (a strike's velocity change included, which a sampled
+    accelerometer misses)."""
 
     gyro: np.ndarray
     accel: np.ndarray
@@ -51,6 +63,8 @@ class NavigationReading:
     depth: float = 0.0
     dvl_fresh: bool = True
     dvl_gyro: np.ndarray | None = None
+    delta_angle: np.ndarray | None = None
+    delta_velocity: np.ndarray | None = None
 
 
 class NavigationSensor:
@@ -84,6 +98,8 @@ class NavigationSensor:
         self.k = 0
         self._dvl: np.ndarray | None = None
         self.surface = float(world.vehicle_motion().position[2])  # depth 0: the start
+        self._attitude = world.hull_rotation  # for the delta angle and velocity
+        self._velocity = world.hull_velocity()[3:].copy()  # the IMU's, world frame
 
     def _due(self, rate: float) -> bool:
         """A measurement at ``rate`` [Hz] falls in this control step (step 0 included)."""
@@ -100,6 +116,15 @@ class NavigationSensor:
         truth = self.world.vehicle_motion()
         n, rng = self.noise, self.rng
         gyro = truth.gyro + self.gyro_bias + rng.standard_normal(3) * self.gyro_std
+        attitude = self.world.hull_rotation
+        delta = _rotation_vector(self._attitude.T @ attitude) + self.Te * self.gyro_bias \
+            + rng.standard_normal(3) * n.gyro_noise_density * math.sqrt(self.Te)
+        self._attitude = attitude
+        velocity = self.world.hull_velocity()[3:].copy()
+        dv = attitude.T @ (velocity - self._velocity + self.Te * GRAVITY_REACTION) \
+            + self.Te * self.accel_bias \
+            + rng.standard_normal(3) * n.accel_noise_density * math.sqrt(self.Te)
+        self._velocity = velocity
         accel = truth.accel + self.accel_bias + rng.standard_normal(3) * self.accel_std
         self.gyro_bias = self._drift(self.gyro_bias, self._decay[0], n.gyro_bias_instability)
         self.accel_bias = self._drift(self.accel_bias, self._decay[1],
@@ -115,4 +140,13 @@ class NavigationSensor:
         depth = self.surface - truth.position[2] + rng.standard_normal() * n.depth_noise
         self.k += 1
         return NavigationReading(gyro, accel, self._dvl.copy(), encoder, fix, float(depth),
-                                 fresh, self._dvl_gyro.copy())
+                                 fresh, self._dvl_gyro.copy(), delta, dv)
+
+
+def _rotation_vector(R: np.ndarray) -> np.ndarray:
+    """The rotation vector (axis times angle) [rad] of a rotation matrix."""
+    angle = math.acos(max(-1.0, min(1.0, 0.5 * (np.trace(R) - 1.0))))
+    axis = np.array([R[2, 1] - R[1, 2], R[0, 2] - R[2, 0], R[1, 0] - R[0, 1]])
+    if angle < 1e-9:
+        return 0.5 * axis
+    return axis * angle / (2.0 * math.sin(angle))

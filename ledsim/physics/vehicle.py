@@ -51,11 +51,16 @@ class LineOfSight:
         acceleration: its change over the last step [rad/s^2]: the input the hull's
             motion adds to phi'' (the gimbal itself is inertially free on its hinge).
         hull_rate: the gyro's yaw rate [rad/s].
+        bearing: how far the LED's bearing in the hull's frame has turned since the
+            start [rad]: the integral of ``rate - hull_rate``, pulled over
+            ``bearing_time`` towards the bearing the navigated pose gives (the LED where
+            the start put it), so a large excursion of the hull leaves no lasting error.
     """
 
     rate: float = 0.0
     acceleration: float = 0.0
     hull_rate: float = 0.0
+    bearing: float = 0.0
 
     @property
     def incidence_rate(self) -> float:
@@ -114,12 +119,14 @@ class Vehicle:
         velocity_time: time constant of the DVL/accelerometer velocity filter [s].
         fix_gain: share of an acoustic fix taken into the navigated position [-].
         rate_time: time constant of the LOS rate's low-pass [s].
+        bearing_time: time constant of the bearing's pull towards the navigation's [s].
     """
 
     def __init__(self, world: LinkWorld, Te: float, seed: int, distance: float,
                  station_keeping: bool = True, noise: NavigationNoise | None = None,
                  gains: StationKeeping = StationKeeping(), velocity_time: float = 0.3,
-                 fix_gain: float = 0.05, rate_time: float = 0.05):
+                 fix_gain: float = 0.05, rate_time: float = 0.05,
+                 bearing_time: float = 2.0):
         self.world, self.Te, self.distance = world, Te, distance
         self.sensor = NavigationSensor(world, Te, seed, noise)
         self.station_keeping = station_keeping and world.ids.thrusters is not None
@@ -149,20 +156,28 @@ class Vehicle:
         gyro = n.gyro_noise_density**2 / (2 * Te) * lever2
         self.rate_noise = math.sqrt(dvl + gyro * Te / (2 * rate_time)) / distance
         self._raw = self._power = 0.0
+        # Where the start put the LED: d ahead of the hinge along the hull's axis.
+        self.k_bearing = min(1.0, Te / bearing_time)
+        hinge0 = world.hull_pos[:2] + (self.attitude @ self.l_gimbal)[:2]
+        self.led = hinge0 + distance * self.attitude[:2, 0] / np.linalg.norm(
+            self.attitude[:2, 0])
+        self._bearing0 = 0.0
+        self._bearing0 = self._nav_bearing(self.navigation.state)
 
     def act(self, t: float) -> LineOfSight:
         """Sense, navigate, measure the line of sight and drive the thrusters at ``t``."""
         r = self.reading = self.sensor.read()
         omega = r.gyro
-        self.attitude = _rotate(self.attitude, 0.5 * (omega + self._omega) if self.k
-                                else omega, self.Te)
-        # The accelerometer reads gravity's reaction too: take it off with the attitude.
-        a = r.accel - self.attitude.T @ np.array([0.0, 0.0, 9.81])
+        self.attitude = _rotate(self.attitude, r.delta_angle / self.Te, self.Te)
+        # The IMU's velocity increment holds gravity's reaction too: take it off with the
+        # attitude. a: the mean acceleration over the step, hull frame [m/s^2].
+        a = r.delta_velocity / self.Te - self.attitude.T @ np.array([0.0, 0.0, 9.81])
         self.velocity = self.velocity + self.Te * (a - np.cross(omega, self.velocity))
         if r.dvl_fresh:  # a ping: blend it in, its lever arm at the ping's rate
             v_dvl = self.R_dvl @ r.dvl - np.cross(r.dvl_gyro, self.l_dvl)
             self.velocity += self.k_velocity * (v_dvl - self.velocity)
-        nav = self.navigation.update(omega, r.dvl, r.position_fix, velocity=self.velocity)
+        nav = self.navigation.update(omega, r.dvl, r.position_fix, velocity=self.velocity,
+                                     delta_yaw=r.delta_angle[2])
         v_g = self.velocity + np.cross(omega, self.l_gimbal)
         c, s = math.cos(r.encoder), math.sin(r.encoder)
         raw = (-c * v_g[1] + s * v_g[0]) / self.distance
@@ -172,7 +187,10 @@ class Vehicle:
         # still hull's feed-forward would only turn the gimbal by that noise.
         rate = self._raw * max(0.0, 1.0 - self.rate_noise**2 / max(self._power, 1e-30))
         accel = (rate - self.los.rate) / self.Te if self.k else 0.0
-        self.los = LineOfSight(rate, accel, float(omega[2]))
+        bearing = self.los.bearing + self.Te * (rate - float(omega[2]))
+        bearing += self.k_bearing * math.remainder(self._nav_bearing(nav) - bearing,
+                                                   2 * math.pi)
+        self.los = LineOfSight(rate, accel, float(omega[2]), bearing)
         if self.station_keeping:
             alpha = (omega - self._omega) / self.Te if self.k else np.zeros(3)
             measured = self.mass * np.array([*a, alpha[1], alpha[2]]) - self.thrust
@@ -182,6 +200,16 @@ class Vehicle:
         self._omega = omega
         self.k += 1
         return self.los
+
+    def _nav_bearing(self, nav) -> float:
+        """The LED's bearing in the hull's frame from the navigated pose, less the
+        start's [rad]."""
+        c, s = math.cos(nav.heading), math.sin(nav.heading)
+        lx, ly = self.l_gimbal[0], self.l_gimbal[1]
+        hinge = nav.position + np.array([c * lx - s * ly, s * lx + c * ly])
+        dx, dy = self.led - hinge
+        return math.remainder(math.atan2(dy, dx) - nav.heading - self._bearing0,
+                              2 * math.pi)
 
     def _thrust(self, position: np.ndarray, height: float, heading: float,
                 omega: np.ndarray) -> np.ndarray:
