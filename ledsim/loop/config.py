@@ -19,6 +19,7 @@ from ..config import PAPER_DISTANCE, LinkConstants, NavigationNoise
 from ..control import AlignmentPID, Excitation, PaperRateDamping
 from ..errors import LedsimError
 from ..estimators import ESTIMATORS
+from ..keyvalues import parse_key_values
 from ..physics.disturbances import check_timing, parse_disturbance
 from ..physics.scene import WorldConfig
 from ..scenario import Scenario
@@ -47,17 +48,8 @@ FILTER_DISTANCES = ("configured", "nominal")
 def navigation_noise(settings: tuple[str, ...]) -> NavigationNoise:
     """:class:`~ledsim.config.NavigationNoise` with ``key=value`` ``settings`` applied;
     a bad key or value raises :class:`LedsimError` naming it."""
-    names = [f.name for f in fields(NavigationNoise)]
-    values = {}
-    for item in settings:
-        key, eq, text = item.partition("=")
-        if not eq or key not in names:
-            raise LedsimError(f"--imu-noise {item!r} is not allowed: use key=value with key "
-                              f"in {', '.join(names)}")
-        try:
-            values[key] = int(text) if key == "encoder_bits" else float(text)
-        except ValueError:
-            raise LedsimError(f"--imu-noise {item!r}: {text!r} is not a number") from None
+    values = parse_key_values(settings, [f.name for f in fields(NavigationNoise)],
+                              "--imu-noise", LedsimError, integers=("encoder_bits",))
     try:
         return NavigationNoise(**values)
     except LedsimError as e:

@@ -24,6 +24,7 @@ from dataclasses import dataclass, fields
 
 import numpy as np
 
+from ..keyvalues import parse_key_values
 from .disturbance_base import Disturbance, DisturbanceError  # noqa: F401 (re-exported)
 from .water import WaterCurrent, Waves
 from .world import LinkWorld
@@ -182,22 +183,14 @@ def parse_disturbance(text: str) -> Disturbance:
         raise DisturbanceError(f"unknown disturbance {name!r}: choose from "
                                f"{', '.join(DISTURBANCES)}")
     cls = DISTURBANCES[name]
-    allowed = {f.name: f.type for f in fields(cls)}
-    kwargs = {}
-    for item in filter(None, args.split(",")):
-        key, eq, value = item.partition("=")
-        if not eq or key not in allowed:
-            raise DisturbanceError(f"bad parameter {item!r} for {name}: use key=value with "
-                                   f"key in {', '.join(allowed)}")
-        try:
-            kwargs[key] = int(value) if key == "seed" else float(value)
-        except ValueError:
-            raise DisturbanceError(f"bad value {value!r} for {name}.{key}: not a number") \
-                from None
+    items = list(filter(None, args.split(",")))
+    kwargs = parse_key_values(items, [f.name for f in fields(cls)], name, DisturbanceError,
+                              integers=("seed",))
+    texts = dict(i.partition("=")[::2] for i in items)
+    for key, v in kwargs.items():
         lo, hi, unit, lo_open = RANGES[key]
-        v = kwargs[key]
         if not (math.isfinite(v) and (lo < v if lo_open else lo <= v) and v <= hi):
-            raise DisturbanceError(f"{name}.{key}={value} is not allowed: must be in "
+            raise DisturbanceError(f"{name}.{key}={texts[key]} is not allowed: must be in "
                                    f"{'(' if lo_open else '['}{lo:.4g}, {hi:.4g}] {unit}"
                                    .rstrip())
     for key in ("hold", "hull"):

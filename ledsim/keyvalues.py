@@ -1,0 +1,25 @@
+"""``key=value`` settings from the command line (a disturbance's knobs, a sensor's noise
+figures), read into numbers with one-line errors that name the bad item."""
+
+from __future__ import annotations
+
+from collections.abc import Iterable
+
+
+def parse_key_values(items: Iterable[str], allowed: Iterable[str], what: str,
+                     error: type[Exception], integers: Iterable[str] = ()) -> dict:
+    """``{key: number}`` from ``key=value`` items; keys in ``integers`` are ints, the rest
+    floats. A missing ``=``, a key not in ``allowed`` or a value that is not a number
+    raises ``error`` naming ``what`` (for example ``"current"``)."""
+    allowed, integers = list(allowed), set(integers)
+    values = {}
+    for item in items:
+        key, eq, text = item.partition("=")
+        if not eq or key not in allowed:
+            raise error(f"bad parameter {item!r} for {what}: use key=value with key in "
+                        f"{', '.join(allowed)}")
+        try:
+            values[key] = int(text) if key in integers else float(text)
+        except ValueError:
+            raise error(f"bad value {text!r} for {what}.{key}: not a number") from None
+    return values
