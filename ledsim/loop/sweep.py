@@ -39,12 +39,12 @@ BACKENDS = ("local", "ray")
 NO_DISTURBANCE = "none"
 #: Columns of ``results.csv`` that describe the cell.
 CELL_COLUMNS = ("scenario", "estimator", "disturbance", "distance", "noise_scale", "seed",
-                "seconds", "supervision")
+                "seconds", "supervision", "imu", "station_keeping")
 #: Columns that measure the run (units as in :class:`~ledsim.loop.metrics.RunMetrics`).
 METRIC_COLUMNS = ("rmse_x1", "rmse_x2", "rmse_steady_x1", "rmse_steady_x2",
                   "alignment_time", "availability", "mean_power", "recovery_time",
                   "lost_share", "detection_delay", "losses", "snr_db", "ber",
-                  "throughput_bps", "fec_share")
+                  "throughput_bps", "fec_share", "geometry_share")
 #: Columns that depend on the machine and its load: the only ones that may differ
 #: between backends or reruns.
 TIMING_COLUMNS = ("us_per_step", "realtime_factor")
@@ -137,14 +137,15 @@ def run_cell(job: tuple[RunConfig, Cell]) -> dict:
     row = {"scenario": cfg.scenario, "estimator": cell.estimator,
            "disturbance": cell.disturbance, "distance": cell.distance,
            "noise_scale": cell.noise_scale, "seed": cell.seed, "seconds": cfg.run_seconds,
-           "supervision": cfg.supervision,
+           "supervision": cfg.supervision, "imu": cfg.imu,
+           "station_keeping": cfg.station_keeps,
            "rmse_x1": m.rmse["x1"], "rmse_x2": m.rmse["x2"],
            "rmse_steady_x1": m.rmse_steady["x1"], "rmse_steady_x2": m.rmse_steady["x2"],
            "alignment_time": m.alignment_time, "availability": m.availability,
            "mean_power": m.mean_power, "recovery_time": m.recovery_time,
            "lost_share": m.lost_share, "detection_delay": m.detection_delay,
            "snr_db": m.snr_db, "ber": m.ber, "throughput_bps": m.throughput_bps,
-           "fec_share": m.fec_share,
+           "fec_share": m.fec_share, "geometry_share": m.geometry_share,
            "losses": len(m.link_events),
            "us_per_step": out.us_per_step, "realtime_factor": out.realtime_factor}
     return {"version": __version__, "row": to_jsonable(row)}
@@ -217,6 +218,8 @@ def summarize_rows(rows: list[dict]) -> list[dict]:
                   "lost_share", "fec_share", "throughput_bps"):
             stat = Stat.over(r[m] for r in rs)
             s[f"{m}_mean"], s[f"{m}_std"] = stat.mean, stat.std
+            if m == "recovery_time":  # how many of the runs recovered
+                s["recovery_time_n"] = stat.n
         out.append(s)
     return out
 
