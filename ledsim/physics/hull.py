@@ -65,13 +65,11 @@ class HullAccess:
         height [m]), which MuJoCo's gravity compensation at the centre of mass lacks."""
         hull = self.ids.hull_body
         m = self.model
-        buoyancy = m.body_mass[hull] * m.body_gravcomp[hull] * float(np.linalg.norm(
-            m.opt.gravity))
-        z_hull = self.data.xmat[hull].reshape(3, 3)[:, 2]
+        k = float(m.body_mass[hull] * m.body_gravcomp[hull]) * math.sqrt(
+            float(m.opt.gravity @ m.opt.gravity)) * self.config.metacentric_height
+        R = self.data.xmat[hull]  # z_hull = (R[2], R[5], R[8]); z_hull x z = (R[5], -R[2], 0)
         xfrc = self.data.xfrc_applied[hull]
-        xfrc[:3] = 0.0
-        xfrc[3:] = buoyancy * self.config.metacentric_height * np.cross(z_hull,
-                                                                    (0.0, 0.0, 1.0))
+        xfrc[:] = (0.0, 0.0, 0.0, k * R[5], -k * R[2], 0.0)
 
     def add_hull_wrench(self, force=(0.0, 0.0, 0.0), torque=(0.0, 0.0, 0.0)) -> None:
         """Add a force [N] and torque [N m] (world frame, at the hull's centre of mass)."""
