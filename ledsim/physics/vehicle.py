@@ -146,7 +146,7 @@ class Vehicle:
         self.reading: NavigationReading | None = None
         self._omega = np.zeros(3)
         self.k = 0  # steps taken
-        # The LOS rate: low-passed over rate_time, and its power over power_time; the
+        # The LOS rate: low-passed over rate_time, and its power over 0.5 s; the
         # noise it carries [rad/s] from the sensors' figures: the DVL's through the
         # velocity filter, the gyro's through the gimbal's lever arm, then the low-pass.
         n = self.sensor.noise
