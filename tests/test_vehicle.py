@@ -57,6 +57,10 @@ def test_bad_sensor_noise_is_refused_naming_it():
                       ("nosuch=1", "nosuch"), ("fix_noise=x", "'x'")):
         with pytest.raises(LedsimError, match=word):
             RunConfig(imu_noise=(bad,)).validate()
+    assert RunConfig(station_keeping_gains=("kd=100",)).world.keeping_gains().kd == 100.0
+    for bad in ("kd=-1", "observer_time=0", "kp=inf", "stiff=1"):
+        with pytest.raises(LedsimError, match="--station-keeping-gain"):
+            RunConfig(station_keeping_gains=(bad,)).validate()
 
 
 def test_availability_counts_only_a_geometry_that_allows_a_link():

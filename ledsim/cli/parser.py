@@ -81,6 +81,11 @@ def _add_vehicle_args(p) -> None:
                    help="a noise figure of the vehicle's sensors (ledsim.config."
                    "NavigationNoise: gyro_noise_density, dvl_noise, fix_noise, ...; "
                    "repeatable or comma-joined)")
+    p.add_argument("--station-keeping-gain", action="append", default=[],
+                   metavar="KEY=VALUE",
+                   help="a gain of the station keeping (ledsim.physics.vehicle."
+                   "StationKeeping: kp, kd, kp_pitch, kd_pitch, kp_yaw, kd_yaw, "
+                   "observer_time; repeatable or comma-joined)")
 
 
 def _add_loop_args(p) -> None:

@@ -69,7 +69,8 @@ def start_world(cfg: RunConfig, system: GimbalSystem, world: LinkWorld, seed: in
     vehicle = None
     if cfg.imu or world.ids.vehicle_sensors is not None:
         vehicle = Vehicle(world, system.Te, seed, cfg.distance, cfg.station_keeps,
-                          noise=cfg.world.navigation_noise())
+                          noise=cfg.world.navigation_noise(),
+                          gains=cfg.world.keeping_gains())
     prepare(world, disturbances, world.time, vehicle)
     return Surroundings(sensor, disturbances, vehicle)
 

@@ -22,6 +22,7 @@ from ..estimators import ESTIMATORS
 from ..keyvalues import parse_key_values
 from ..physics.disturbances import check_timing, parse_disturbance
 from ..physics.scene import WorldConfig
+from ..physics.vehicle import StationKeeping
 from ..scenario import Scenario
 
 PHYSICS_SCENARIOS = {
@@ -56,6 +57,19 @@ def navigation_noise(settings: tuple[str, ...]) -> NavigationNoise:
         raise LedsimError(f"--imu-noise: {e}") from None
 
 
+def keeping_gains(settings: tuple[str, ...]) -> StationKeeping:
+    """:class:`~ledsim.physics.vehicle.StationKeeping` with ``key=value`` ``settings``
+    applied; a bad key, or a value that is not a finite number >= 0, raises
+    :class:`LedsimError` naming it."""
+    values = parse_key_values(settings, [f.name for f in fields(StationKeeping)],
+                              "--station-keeping-gain", LedsimError)
+    for key, v in values.items():
+        if not (math.isfinite(v) and v >= 0 and (v > 0 or key != "observer_time")):
+            raise LedsimError(f"--station-keeping-gain {key}={v!r} is not allowed: must be "
+                              f"{'> 0 s' if key == 'observer_time' else '>= 0'} and finite")
+    return StationKeeping(**values)
+
+
 @dataclass(frozen=True)
 class WorldPart:
     """The MuJoCo world of an experiment.
@@ -71,6 +85,8 @@ class WorldPart:
         imu_noise: ``key=value`` settings of the vehicle's sensors' noise
             (:class:`~ledsim.config.NavigationNoise`'s fields; the rest keep their
             datasheet figures).
+        station_keeping_gains: ``key=value`` settings of the station keeping's gains
+            (:class:`~ledsim.physics.vehicle.StationKeeping`'s fields).
     """
 
     distance: float = PAPER_DISTANCE
@@ -80,10 +96,15 @@ class WorldPart:
     integrator: str = "implicitfast"
     station_keeping: bool = True
     imu_noise: tuple[str, ...] = ()
+    station_keeping_gains: tuple[str, ...] = ()
 
     def navigation_noise(self) -> NavigationNoise:
         """The vehicle's sensors' noise: the defaults with ``imu_noise`` applied."""
         return navigation_noise(self.imu_noise)
+
+    def keeping_gains(self) -> StationKeeping:
+        """The station keeping's gains: the defaults with ``station_keeping_gains``."""
+        return keeping_gains(self.station_keeping_gains)
 
     def world_config(self, distance: float | None = None) -> WorldConfig:
         """The MuJoCo world (at ``distance`` [m] instead, when given); its control period
@@ -193,6 +214,7 @@ class RunConfig:
     station_keeping: bool = WorldPart.station_keeping
     imu: bool = EstimatorPart.imu
     imu_noise: tuple[str, ...] = WorldPart.imu_noise
+    station_keeping_gains: tuple[str, ...] = WorldPart.station_keeping_gains
 
     @classmethod
     def of(cls, world: WorldPart = WorldPart(), task: TaskPart = TaskPart(),
@@ -232,6 +254,7 @@ class RunConfig:
                 raise LedsimError(f"{flag} {value!r} is not allowed: must be {allowed}")
         check_timing([parse_disturbance(d) for d in self.disturbances], self.run_seconds)
         navigation_noise(self.imu_noise)
+        keeping_gains(self.station_keeping_gains)
 
     @property
     def scenario_spec(self) -> Scenario:
