@@ -23,3 +23,16 @@ def parse_key_values(items: Iterable[str], allowed: Iterable[str], what: str,
         except ValueError:
             raise error(f"bad value {text!r} for {what}.{key}: not a number") from None
     return values
+
+
+def settings_of(kind: type, items: Iterable[str], flag: str, error: type[Exception],
+                integers: Iterable[str] = ()):
+    """``kind(**values)`` from ``key=value`` items, the keys ``kind``'s dataclass fields.
+    A bad item, or a value ``kind`` refuses, raises ``error`` naming ``flag``."""
+    from dataclasses import fields
+
+    values = parse_key_values(items, [f.name for f in fields(kind)], flag, error, integers)
+    try:
+        return kind(**values)
+    except error as e:
+        raise error(f"{flag}: {e}") from None

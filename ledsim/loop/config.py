@@ -19,7 +19,7 @@ from ..config import PAPER_DISTANCE, LinkConstants, NavigationNoise
 from ..control import AlignmentPID, Excitation, PaperRateDamping
 from ..errors import LedsimError
 from ..estimators import ESTIMATORS
-from ..keyvalues import parse_key_values
+from ..keyvalues import settings_of
 from ..physics.disturbances import check_timing, parse_disturbance
 from ..physics.scene import WorldConfig
 from ..physics.vehicle import StationKeeping
@@ -49,25 +49,14 @@ FILTER_DISTANCES = ("configured", "nominal")
 def navigation_noise(settings: tuple[str, ...]) -> NavigationNoise:
     """:class:`~ledsim.config.NavigationNoise` with ``key=value`` ``settings`` applied;
     a bad key or value raises :class:`LedsimError` naming it."""
-    values = parse_key_values(settings, [f.name for f in fields(NavigationNoise)],
-                              "--imu-noise", LedsimError, integers=("encoder_bits",))
-    try:
-        return NavigationNoise(**values)
-    except LedsimError as e:
-        raise LedsimError(f"--imu-noise: {e}") from None
+    return settings_of(NavigationNoise, settings, "--imu-noise", LedsimError,
+                       integers=("encoder_bits",))
 
 
 def keeping_gains(settings: tuple[str, ...]) -> StationKeeping:
     """:class:`~ledsim.physics.vehicle.StationKeeping` with ``key=value`` ``settings``
-    applied; a bad key, or a value that is not a finite number >= 0, raises
-    :class:`LedsimError` naming it."""
-    values = parse_key_values(settings, [f.name for f in fields(StationKeeping)],
-                              "--station-keeping-gain", LedsimError)
-    for key, v in values.items():
-        if not (math.isfinite(v) and v >= 0 and (v > 0 or key != "observer_time")):
-            raise LedsimError(f"--station-keeping-gain {key}={v!r} is not allowed: must be "
-                              f"{'> 0 s' if key == 'observer_time' else '>= 0'} and finite")
-    return StationKeeping(**values)
+    applied; a bad key or value raises :class:`LedsimError` naming it."""
+    return settings_of(StationKeeping, settings, "--station-keeping-gain", LedsimError)
 
 
 @dataclass(frozen=True)

@@ -31,13 +31,13 @@ Once per control step (:func:`ledsim.physics.tick.prepare`), :meth:`Vehicle.act`
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass
+from dataclasses import dataclass, fields
 
 import numpy as np
 
 from observer.navigation import DeadReckoning
 
-from ..config import NavigationNoise
+from ..config import ConfigError, NavigationNoise
 from .navigation import NavigationReading, NavigationSensor
 from .world import LinkWorld
 
@@ -74,16 +74,19 @@ class StationKeeping:
     pitch, yaw).
 
     A disturbance observer estimates the force and torque the water puts on the hull,
-    ``M a - thrust`` low-passed over ``observer_time`` (a from the accelerometer, the
-    yaw's from the gyro), and the thrusters cancel it: this rejects currents and gusts
-    without stiff position gains. A soft PD on the navigated pose then holds the pose;
-    being soft, it lets through little of the navigation's noise (the acoustic fixes'
-    centimetres, the DVL's millimetres per second), which would otherwise shake the hull.
+    ``M a - thrust`` low-passed over ``observer_time`` (a from the IMU's velocity
+    increments, pitch and yaw's from the gyro), and the thrusters cancel it: this
+    rejects currents and gusts without stiff position gains. A soft PD on the navigated
+    pose then holds the pose; being soft, it lets through little of the navigation's
+    noise (the acoustic fixes' centimetres, the DVL's millimetres per second), which
+    would otherwise shake the hull.
 
     Attributes:
         kp [N/m], kd [N s/m]: surge, sway and heave PD on position and velocity.
         kp_pitch, kp_yaw [N m/rad], kd_pitch, kd_yaw [N m s/rad]: pitch and heading PD.
         observer_time: time constant of the disturbance observer [s].
+
+    Every gain must be >= 0 and finite, the time > 0 (:class:`~ledsim.config.ConfigError`).
     """
 
     kp: float = 15.0
@@ -93,6 +96,14 @@ class StationKeeping:
     kp_yaw: float = 40.0
     kd_yaw: float = 20.0
     observer_time: float = 0.1
+
+    def __post_init__(self) -> None:
+        for f in fields(self):
+            v = getattr(self, f.name)
+            timed = f.name == "observer_time"
+            if not (math.isfinite(v) and (v > 0 if timed else v >= 0)):
+                raise ConfigError(f"{f.name}={v!r} is not allowed: must be "
+                                  f"{'> 0 s' if timed else '>= 0'} and finite")
 
 
 def _cross(a, b) -> np.ndarray:
