@@ -18,6 +18,10 @@ from .errors import LedsimError
 #: shipped MuJoCo bank that serves every other.
 PAPER_DISTANCE = 0.085
 
+#: Standard gravity [m/s^2]: the scene's (``led_link.xml``'s default), what an
+#: accelerometer at rest reads, the waves' dispersion and the datasheets' g.
+GRAVITY = 9.81
+
 
 class ConfigError(LedsimError):
     """A user-supplied constant is out of its allowed range."""
@@ -162,8 +166,8 @@ class NavigationNoise:
     gyro_noise_density: float = math.radians(0.007)
     gyro_bias_instability: float = math.radians(10.0) / 3600.0
     gyro_bias_time: float = 100.0
-    accel_noise_density: float = 120e-6 * 9.81
-    accel_bias_instability: float = 0.03e-3 * 9.81
+    accel_noise_density: float = 120e-6 * GRAVITY
+    accel_bias_instability: float = 0.03e-3 * GRAVITY
     accel_bias_time: float = 100.0
     dvl_noise: float = 0.004
     dvl_rate: float = 8.0

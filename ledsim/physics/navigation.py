@@ -33,13 +33,13 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from ..config import NavigationNoise
+from ..config import GRAVITY, NavigationNoise
 from .world import LinkWorld, WorldError
 
 #: Added to the run's seed for the navigation sensors' own generator.
 SEED_OFFSET = 20_000
 #: What an accelerometer at rest reads: gravity's reaction, world frame [m/s^2].
-GRAVITY_REACTION = np.array([0.0, 0.0, 9.81])
+GRAVITY_REACTION = np.array([0.0, 0.0, GRAVITY])
 
 
 @dataclass

@@ -38,7 +38,7 @@ import numpy as np
 from observer.navigation import DeadReckoning
 
 from ..config import ConfigError, NavigationNoise
-from .navigation import NavigationReading, NavigationSensor
+from .navigation import GRAVITY_REACTION, NavigationReading, NavigationSensor
 from .world import LinkWorld
 
 
@@ -188,7 +188,7 @@ class Vehicle:
         self.attitude = _rotate(self.attitude, r.delta_angle / self.Te, self.Te)
         # The IMU's velocity increment holds gravity's reaction too: take it off with the
         # attitude. a: the mean acceleration over the step, hull frame [m/s^2].
-        a = r.delta_velocity / self.Te - self.attitude.T @ np.array([0.0, 0.0, 9.81])
+        a = r.delta_velocity / self.Te - self.attitude.T @ GRAVITY_REACTION
         self.velocity = self.velocity + self.Te * (a - _cross(omega, self.velocity))
         if r.dvl_fresh:  # a ping: blend it in, its lever arm at the ping's rate
             v_dvl = self.R_dvl @ r.dvl - _cross(r.dvl_gyro, self.l_dvl)

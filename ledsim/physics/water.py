@@ -12,10 +12,9 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from ..config import GRAVITY
 from .disturbance_base import Disturbance
 from .world import LinkWorld
-
-GRAVITY = 9.81  # [m/s^2]
 
 
 @dataclass
