@@ -6,6 +6,11 @@ name        estimator
 kkl         the learned KKL observer from a checkpoint (validated against the system)
 kkl-paper   the same class, trained with the paper's literal recipe (closed form)
 kkl-handover  the default KKL handing over to a slow-filter KKL after 3 s (closed form)
+kkl-scheduled  the gain-scheduled KKL: maps learned over a range of gains, the gain
+            tuned while it runs (:mod:`observer.scheduled`; MuJoCo loop, where it is
+            also what ``kkl`` runs under supervision)
+kkl-bank    the bank of fixed-gain KKL observers for 1x-13x noise (MuJoCo loop; the
+            supervised ``kkl`` before the scheduled one)
 ekf         extended Kalman filter
 ukf         unscented Kalman filter
 pf          bootstrap particle filter
@@ -30,6 +35,8 @@ ESTIMATORS = {
     "kkl": "learned KKL observer (shipped checkpoint or --checkpoint)",
     "kkl-paper": "KKL trained with the paper's literal recipe",
     "kkl-handover": "default KKL handing over to a slow-filter KKL after 3 s",
+    "kkl-scheduled": "gain-scheduled KKL that tunes its own gain (MuJoCo loop)",
+    "kkl-bank": "bank of fixed-gain KKL observers for 1x-13x noise (MuJoCo loop)",
     "ekf": "extended Kalman filter",
     "ukf": "unscented Kalman filter",
     "pf": "bootstrap particle filter",
@@ -54,7 +61,8 @@ def build_estimator(name: str, system: DiscreteSystem, *, model: DiscreteSystem 
         model: what the estimator computes with (f and h of the filters, f of the KKL's
             Omega correction); default ``system``. In MuJoCo this is the identified
             one-step model, since the filters need f thousands of times per step.
-        checkpoint: KKL checkpoint file (required for ``kkl`` and ``kkl-paper``).
+        checkpoint: KKL checkpoint file (required for ``kkl``, ``kkl-paper`` and
+            ``kkl-scheduled``; a scheduled checkpoint gives the scheduled KKL either way).
         particles: particle-filter size (its random numbers follow the run's seed:
             ``Estimator.seed_run``).
         use_omega: apply the KKL's Omega correction.
@@ -64,7 +72,7 @@ def build_estimator(name: str, system: DiscreteSystem, *, model: DiscreteSystem 
             half).
     """
     model = system if model is None else model
-    if name in ("kkl", "kkl-paper"):
+    if name in ("kkl", "kkl-paper", "kkl-scheduled", "kkl-bank"):
         if checkpoint is None:
             raise LedsimError(f"estimator {name!r} needs a checkpoint")
         return ckpt.load(checkpoint, system, model=model, use_omega=use_omega, name=name)

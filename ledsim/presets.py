@@ -15,7 +15,7 @@ if TYPE_CHECKING:  # torch is imported only when training
 from .errors import LedsimError
 
 #: Names accepted by :func:`observer_preset` (``ledsim train --design``).
-PRESETS = ("default", "low-light", "slow", "deep", "paper")
+PRESETS = ("default", "low-light", "slow", "deep", "paper", "scheduled")
 
 #: Filter rates r of the default design: eigenvalues 1 - Te r per photodiode. The
 #: paper's slowest rate (r = 1, eigenvalue 0.99) makes T too hard to learn precisely.
@@ -36,7 +36,8 @@ def observer_preset(name: str, Te: float) -> tuple[KKLDesign, TrainingConfig]:
     ``"slow"``: slower still (rates 0.1-10), the long-memory half of ``kkl-handover``.
     ``"deep"``: the best gradient-trained observer of ``scripts/ablation.py``
     (``docs/ablation.md``): a decoder of two hidden layers, Adam on every weight of T
-    and T* started from the least-squares solution. About 2x the default's error."""
+    and T* started from the least-squares solution. About 2x the default's error.
+    ``"scheduled"`` (the gain-scheduled KKL) is trained by :func:`train_preset`."""
     from observer.training import TrainingConfig
 
     if name == "paper":
@@ -57,4 +58,39 @@ def observer_preset(name: str, Te: float) -> tuple[KKLDesign, TrainingConfig]:
     if name == "slow":
         return KKLDesign.split(Te, SLOW_RATES, name="slow"), TrainingConfig(
             hidden=1000, decoder_hidden=1000, decoder_feature_scale=2.0)
+    if name == "scheduled":
+        raise LedsimError("the 'scheduled' design is trained by train_preset (its maps "
+                          "are tables over the gain, not one KKLDesign)")
     raise LedsimError(f"unknown observer preset {name!r}: choose one of {', '.join(PRESETS)}")
+
+
+def train_preset(system, name: str, samples: int, seed: int, data=None,
+                 progress: bool = False):
+    """Train the observer of preset ``name`` on ``system`` (``samples`` uniform
+    transitions from ``seed``, or ``data`` = (x, f(x), h(x)) given); returns the observer
+    and a :class:`~observer.training.TrainingReport`.
+
+    ``"scheduled"`` is the gain-scheduled KKL (:mod:`observer.scheduled`): its maps are
+    learned over a range of gains, and it tunes its own gain while it runs
+    (``docs/observer.md``). Its report's ``loss_dyn`` is the squared dynamics residual
+    over z's spread at the worst grid gain, ``loss_recon`` the squared reconstruction
+    error over the domain half-widths (nominal noise, mean over the grid)."""
+    import numpy as np
+
+    from observer.training import TrainingReport, generate_transitions, train_kkl
+
+    if name != "scheduled":
+        design, cfg = observer_preset(name, system.Te)
+        cfg.n_samples, cfg.seed = samples, seed
+        return train_kkl(system, design, cfg, data=data, progress=progress)
+    from observer.scheduled import ScheduledDesign
+    from observer.scheduled_training import ScheduledTrainingConfig, train_scheduled_kkl
+
+    cfg = ScheduledTrainingConfig(seed=seed)
+    if data is None:
+        data = generate_transitions(system, samples, cfg.u_bar, np.random.default_rng(seed))
+    obs, rep = train_scheduled_kkl(system, ScheduledDesign(), data, cfg, progress=progress)
+    err = np.asarray(rep["recon_rmse"])[:, 0] / system.domain_halfwidth
+    return obs, TrainingReport(loss_dyn=rep["residual_rel_worst"] ** 2,
+                               loss_recon=float((err**2).sum(axis=1).mean()),
+                               seconds=rep["seconds"])

@@ -31,12 +31,14 @@ def shipped_checkpoint(distance: float, world: str = "closed-form",
         distance: link distance d [m].
         world: ``"closed-form"`` (trained on the paper's model) or ``"mujoco"``
             (trained on transitions of the MuJoCo world).
-        design: ``"default"``, or ``"paper"`` or ``"slow"`` (closed-form only).
+        design: ``"default"``, or ``"paper"`` or ``"slow"`` (closed-form only), or
+            ``"scheduled"`` (the gain-scheduled KKL, MuJoCo only).
         noise: measurement noise it was trained for, over the nominal [-] (MuJoCo
             observers of the bank that serves weak links).
     """
     prefix = {"closed-form": {"default": "kkl", "paper": "kkl_paper", "slow": "kkl_slow"},
-              "mujoco": {"default": "kkl_mujoco"}}[world][design]
+              "mujoco": {"default": "kkl_mujoco", "scheduled": "kkl_mujoco_scheduled"}
+              }[world][design]
     suffix = "" if noise == 1.0 else f"_noise{noise:g}"
     return checkpoint_dir() / f"{prefix}_d{distance:g}{suffix}.pt"
 

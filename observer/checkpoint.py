@@ -21,10 +21,11 @@ from pathlib import Path
 
 import numpy as np
 
-from . import tensorfile
+from . import scheduled_checkpoint, tensorfile
 from .errors import ObserverError
 from .kkl import KKLObserver
 from .nets import NumpyMLP
+from .scheduled import ScheduledKKL
 from .system import DiscreteSystem
 
 FORMAT = "ledsim-kkl/1"
@@ -53,23 +54,21 @@ def save(obs: KKLObserver, path: str | Path, extra: dict | None = None,
     it); an application passes its own (``ledsim.outputs.save_checkpoint``)."""
     path = Path(path)
     write_bytes = write_bytes or _replace
-    meta = {
-        "format": FORMAT,
-        "system": obs.system.metadata(),
-        "eigenvalues": obs.eigenvalues.tolist(),
-        "B_scaled": obs.B.tolist(),
-        "u_bar": obs.u_bar,
-        **getattr(obs, "training_metadata", {}),
-        **(extra or {}),
-    }
+    if isinstance(obs, ScheduledKKL):
+        meta, named = scheduled_checkpoint.metadata(obs), scheduled_checkpoint.arrays(obs)
+    else:
+        meta = {"format": FORMAT, "system": obs.system.metadata(),
+                "eigenvalues": obs.eigenvalues.tolist(), "B_scaled": obs.B.tolist(),
+                "u_bar": obs.u_bar}
+        named = {f"{prefix}.{k}": a for prefix, net in (("encoder_T", obs.encoder_T),
+                                                      ("decoder_T_star", obs.decoder_T_star))
+                 for k, a in net.arrays().items()}
+    meta = strict_json({**meta, **getattr(obs, "training_metadata", {}), **(extra or {})})
     import torch
 
-    tensors = {f"{prefix}.{k}": torch.from_numpy(np.ascontiguousarray(a))
-               for prefix, net in (("encoder_T", obs.encoder_T),
-                                   ("decoder_T_star", obs.decoder_T_star))
-               for k, a in net.arrays().items()}
-    meta = strict_json(meta)
-    payload = {"format": FORMAT, "metadata_json": json.dumps(meta, allow_nan=False), **tensors}
+    tensors = {k: torch.from_numpy(np.ascontiguousarray(a)) for k, a in named.items()}
+    payload = {"format": meta["format"], "metadata_json": json.dumps(meta, allow_nan=False),
+               **tensors}
     buf = io.BytesIO()
     torch.save(payload, buf)
     write_bytes(path, buf.getvalue())
@@ -92,8 +91,10 @@ def metadata(path: str | Path) -> dict:
 
 def load(path: str | Path, system: DiscreteSystem, check: bool = True, *,
          model: DiscreteSystem | None = None, use_omega: bool = True,
-         name: str | None = None) -> KKLObserver:
+         name: str | None = None) -> KKLObserver | ScheduledKKL:
     """Load a checkpoint for ``system``; raise :class:`CheckpointError` if it does not fit.
+    A gain-scheduled KKL's checkpoint (``ledsim train --design scheduled``) gives a
+    :class:`~observer.scheduled.ScheduledKKL`.
 
     ``model``: what the observer computes with (Omega's f, the h of missing samples;
     default ``system``); ``use_omega``: apply the Omega correction; ``name``: the
@@ -104,11 +105,18 @@ def load(path: str | Path, system: DiscreteSystem, check: bool = True, *,
     try:
         payload = _read(path)
         meta = json.loads(payload["metadata_json"])
+        if payload.get("format") == scheduled_checkpoint.FORMAT:
+            _check_system(path, meta["system"], system, check)
+            obs = scheduled_checkpoint.build(payload, meta, system if model is None
+                                             else model, use_omega)
+            return _named(obs, meta, name)
         enc, dec = (_net(payload, prefix) for prefix in ("encoder_T", "decoder_T_star"))
         lam = np.asarray(meta["eigenvalues"], dtype=float)
         B = np.asarray(meta["B_scaled"], dtype=float)
         u_bar = float(meta.get("u_bar", 0.0))
         saved_system = meta["system"]
+    except CheckpointError:  # it loads, but was trained for another system
+        raise
     except Exception as exc:  # corrupt file, wrong keys, not a torch file
         raise CheckpointError(f"checkpoint {str(path)!r} is corrupt or not a ledsim "
                               f"checkpoint ({type(exc).__name__})") from None
@@ -116,14 +124,22 @@ def load(path: str | Path, system: DiscreteSystem, check: bool = True, *,
         raise CheckpointError(f"checkpoint {str(path)!r} has format "
                               f"{payload.get('format')!r}, expected {FORMAT!r}")
     _check_contents(path, enc, dec, lam, B, u_bar, system)
+    _check_system(path, saved_system, system, check)
+    obs = KKLObserver(system if model is None else model, lam, B, enc, dec, u_bar=u_bar,
+                      use_omega=use_omega)
+    return _named(obs, meta, name)
+
+
+def _check_system(path: Path, saved_system: dict, system: DiscreteSystem, check: bool) -> None:
     if check:
         mismatch = first_mismatch(saved_system, system.metadata())
         if mismatch:
             key, saved, current = mismatch
             raise CheckpointError(f"checkpoint {str(path)!r} was trained with {key}={saved!r} "
                                   f"but the run uses {key}={current!r}")
-    obs = KKLObserver(system if model is None else model, lam, B, enc, dec, u_bar=u_bar,
-                      use_omega=use_omega)
+
+
+def _named(obs, meta: dict, name: str | None):
     if name is not None:
         obs.name = name
     obs.training_metadata = {k: meta[k] for k in ("design", "training", "report") if k in meta}

@@ -169,7 +169,7 @@ def test_the_bank_holds_a_far_link_with_its_noisier_member():
     # One nominal observer kept 0.73 of the power at d = 0.2 m (docs/supervision.md).
     from ledsim.loop.closed_loop import ClosedLoop
 
-    loop = ClosedLoop(RunConfig(estimator="kkl", distance=0.2), 0)
+    loop = ClosedLoop(RunConfig(estimator="kkl-bank", distance=0.2), 0)
     out = loop.run()[0]
     assert out.metrics.availability > 0.8
     bank = loop.runs[0].step.estimator
@@ -267,3 +267,16 @@ def test_filters_with_the_kkls_knowledge_of_the_distance_hold_a_far_link():
         RunConfig(estimator="ekf", filter_distance="nominal", supervision=False).validate()
     with pytest.raises(LedsimError, match="filter-distance"):
         RunConfig(filter_distance="guess").validate()
+
+
+def test_the_scheduled_kkl_is_told_the_noise_of_a_far_link():
+    # At d = 0.2 m the powers, rescaled to the reference gain, carry about 5.6x the
+    # nominal noise: the gain-scheduled KKL averages longer than on a near link.
+    from ledsim.loop.closed_loop import ClosedLoop
+
+    loop = ClosedLoop(RunConfig(estimator="kkl", distance=0.2), 0)
+    out = loop.run()[0]
+    assert out.metrics.availability > 0.65
+    est = loop.runs[0].step.estimator
+    assert 4.0 < est.noise < 8.0
+    assert est.w < est.schedule.floor(1.0)

@@ -192,16 +192,13 @@ def train(args) -> int:
                                                    args.design, args.samples, args.seed,
                                                    args.threads, progress=not args.quiet)
     else:
-        from observer.training import train_kkl
-
         from ..config import LinkConstants
         from ..paper.model import LEDLinkModel
-        from ..presets import observer_preset
+        from ..presets import train_preset
 
         system = LEDLinkModel(LinkConstants(distance=args.distance))
-        design, config = observer_preset(args.design or "default", system.Te)
-        config.n_samples, config.seed = args.samples, args.seed
-        obs, report = train_kkl(system, design, config, progress=not args.quiet)
+        obs, report = train_preset(system, args.design or "default", args.samples,
+                                   args.seed, progress=not args.quiet)
         extra = {}
     path = save_checkpoint(obs, args.out, extra=extra)
     log.info(f"trained {args.design or 'default'} observer ({args.world}) in "
@@ -269,6 +266,9 @@ def export(args) -> int:
         raise LedsimError(f"checkpoint {str(path)!r} is for a {saved.get('class')!r} system: "
                           "ledsim exports observers of LEDLinkModel or GimbalSystem")
     obs = build_estimator("kkl", system, model=model, checkpoint=path)
+    if not hasattr(obs, "eigenvalues"):
+        raise LedsimError(f"checkpoint {str(path)!r} is a gain-scheduled KKL: ledsim exports "
+                          "fixed-gain observers (its gain schedule is not one ONNX step)")
     graph = kkl_step_graph(obs, model.step_form())
     atomic_write_bytes(out, lambda tmp: Path(tmp).write_bytes(graph.SerializeToString()))
     log.info(f"wrote {out}: one step of {path} ({saved.get('class')}, q = {obs.q}); inputs "

@@ -28,7 +28,7 @@ def torque_action(torque: float, limit: float) -> float:
 
 class ShippedAlignmentPolicy:
     """``ledsim run``'s stack as a policy on :class:`LinkAlignEnv`: the dropout gate, the
-    estimator under link supervision (the KKL bank, acquisition scans), the scenario's
+    estimator under link supervision (the gain-scheduled KKL, acquisition scans), the scenario's
     control law and the warm-up hold, through the same
     :class:`~ledsim.step.ControlStep`. ``action = policy(observation)``; it starts
     afresh with each episode of the environment.

@@ -227,6 +227,11 @@ class RunConfig:
             if value not in registry:
                 raise LedsimError(f"unknown {flag.lstrip('-')} {value!r}: choose one of "
                                   f"{', '.join(registry)}")
+        if self.estimator == "kkl-scheduled" and not self.supervision and \
+                not self.checkpoint and not math.isclose(self.distance, PAPER_DISTANCE):
+            raise LedsimError(f"estimator 'kkl-scheduled' with --no-supervision runs only "
+                              f"at --distance {PAPER_DISTANCE:g} (got {self.distance:g}): "
+                              "elsewhere it needs the supervisor's gain tracker")
         if self.filter_distance == "nominal" and not self.supervision:
             raise LedsimError("--filter-distance nominal is not allowed with "
                               "--no-supervision: the filters then need the supervisor's "

@@ -2,10 +2,12 @@
 
 The Bayesian filters (EKF, UKF, particle filter) use the identified one-step model of
 the run's own world. The KKL, without ``--checkpoint`` and under supervision, is the
-shipped bank of observers of :data:`REFERENCE_DISTANCE` trained for the noise levels
-:data:`BANK_NOISE` (:class:`observer.bank.ObserverBank`): the supervisor rescales the
-powers to the reference gain, and the bank runs the member trained for the noise those
-rescaled powers carry. One configuration thus serves every distance.
+shipped gain-scheduled KKL of :data:`REFERENCE_DISTANCE` (:mod:`observer.scheduled`):
+the supervisor rescales the powers to the reference gain and tells the observer the
+noise those rescaled powers carry, which sets its gain's floor and its decoder. One
+observer thus serves every distance. ``kkl-bank`` is the former default: the bank of
+fixed-gain observers trained for the noise levels :data:`BANK_NOISE`
+(:class:`observer.bank.ObserverBank`), which runs the member for the noise measured.
 """
 
 from __future__ import annotations
@@ -35,12 +37,28 @@ BANK = ((1.0, "default"), (3.0, "default"), (6.0, "default"), (13.0, "low-light"
 SERVED_DISTANCES = (0.05, 0.3)
 
 
+#: The loop's KKL estimators: ``kkl`` (under supervision the gain-scheduled KKL, without
+#: it the shipped observer of the distance), ``kkl-scheduled`` (always the scheduled one)
+#: and ``kkl-bank`` (the bank of fixed-gain observers that was ``kkl`` before).
+KKL_ESTIMATORS = ("kkl", "kkl-scheduled", "kkl-bank")
+
+
 def served(cfg: RunConfig) -> bool:
-    """Whether the run's KKL is the shipped bank at a distance it is measured to serve
-    (True for every other estimator, and for a KKL of the user's own checkpoint)."""
+    """Whether the run's KKL is a shipped one of the reference distance (scheduled or
+    the bank) at a distance it is measured to serve (True for every other estimator,
+    and for a KKL of the user's own checkpoint)."""
     lo, hi = SERVED_DISTANCES
-    bank = cfg.estimator == "kkl" and cfg.supervision and not cfg.checkpoint
-    return not bank or lo <= cfg.distance <= hi
+    return not uses_reference(cfg) or lo <= cfg.distance <= hi
+
+
+def uses_reference(cfg: RunConfig) -> bool:
+    """Whether the run's KKL is of the reference distance, the gain tracker serving
+    every other: the scheduled KKL, or the bank."""
+    if cfg.estimator == "kkl-scheduled":
+        return True
+    return cfg.estimator in ("kkl", "kkl-bank") and cfg.supervision and not cfg.checkpoint
+
+
 BANK_NOISE = tuple(s for s, _ in BANK)
 
 
@@ -96,14 +114,22 @@ def noisier(world: WorldConfig, scale: float) -> WorldConfig:
 
 
 def kkl_members(cfg: RunConfig) -> list[KKLMember]:
-    """The KKL observers of a run: ``cfg.checkpoint``, the shipped observer of the
-    distance (without supervision), or the shipped bank (with it)."""
+    """The KKL observers of a run. ``kkl``: ``cfg.checkpoint``, the shipped observer of
+    the distance (without supervision) or the shipped gain-scheduled KKL of the
+    reference distance (with it); ``kkl-scheduled``: that one always (or
+    ``cfg.checkpoint``, trained there); ``kkl-bank``: the shipped bank (with
+    supervision). The gain tracker serves every distance from the reference one."""
+    ref = cfg.world_config(distance=REFERENCE_DISTANCE)
+    if cfg.estimator == "kkl-scheduled" or (cfg.estimator == "kkl" and cfg.supervision
+                                            and not cfg.checkpoint):
+        path = Path(cfg.checkpoint) if cfg.checkpoint else require_shipped_checkpoint(
+            REFERENCE_DISTANCE, "mujoco", design="scheduled")
+        return [KKLMember(1.0, path, ref)]
     if cfg.checkpoint:
         return [KKLMember(1.0, Path(cfg.checkpoint), cfg.world_config())]
     if not cfg.supervision:
         return [KKLMember(1.0, require_shipped_checkpoint(cfg.distance, "mujoco"),
                           cfg.world_config())]
-    ref = cfg.world_config(distance=REFERENCE_DISTANCE)
     return [KKLMember(s, require_shipped_checkpoint(REFERENCE_DISTANCE, "mujoco", noise=s),
                       noisier(ref, s)) for s in BANK_NOISE]
 
@@ -115,7 +141,7 @@ def loop_checkpoint(cfg: RunConfig) -> Path:
 
 def check_checkpoint(cfg: RunConfig) -> None:
     """Fail fast (before any worker starts) on a checkpoint that does not fit."""
-    if cfg.estimator == "kkl":
+    if cfg.estimator in KKL_ESTIMATORS:
         for m in kkl_members(cfg):
             ckpt.load(m.checkpoint, GimbalSystem(m.world))
 
@@ -123,7 +149,7 @@ def check_checkpoint(cfg: RunConfig) -> None:
 def loop_estimator(cfg: RunConfig, system: GimbalSystem, model: IdentifiedGimbalModel):
     """(estimator, the system whose gain its model has) for a run in ``system``'s world;
     the estimator is None for the oracle."""
-    if cfg.estimator != "kkl":
+    if cfg.estimator not in KKL_ESTIMATORS:
         if cfg.filter_distance == "nominal":
             # What the KKL knows: the reference distance's model, and the supervisor's
             # gain tracker for the rest; the sensor's noise, rescaled to the model's gain

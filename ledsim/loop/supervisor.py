@@ -73,6 +73,7 @@ class LinkSupervisor:
         self.sensor_noise = noise_ratio * gain_ratio  # in the model's nominal noise
         if isinstance(estimator, ObserverBank):
             estimator.start_with(noise_ratio)
+        self._tell_noise(noise_ratio)
         self.gain = GainTracker(model, lambda y: pair_shape_inverse(y, constants),
                                 model_gain(model, constants), ratio=gain_ratio)
         self.scan = AcquisitionScan(constants, inertia)
@@ -85,6 +86,14 @@ class LinkSupervisor:
         self._lit: tuple[float, float] | None = None  # (phi, q) of the last lit step
         self._anchor: tuple[float, float] | None = None  # ... when the gate closed
         self._gated, self.Te = 0, constants.Te
+
+    def _tell_noise(self, noise_ratio: float) -> None:
+        """A gain-scheduled KKL (alone or the bank's active member) sets its gain's
+        floor and its decoder by the noise the rescaled powers carry."""
+        est = self.estimator
+        est = est.current if isinstance(est, ObserverBank) else est
+        if hasattr(est, "set_noise"):
+            est.set_noise(noise_ratio)
 
     def noise_ratio(self) -> float:
         """Measurement noise in the model's gain over the model's nominal noise [-]: the
@@ -143,6 +152,7 @@ class LinkSupervisor:
                 # The member trained for the noise the rescaled powers now carry.
                 if est.select(self.noise_ratio(), self.gain.normalize(y)):
                     xhat = est.xhat
+            self._tell_noise(self.noise_ratio())
             return Decision(xhat, False)
         if t < self.warmup:  # still converging from the initial guess: not a lost link
             return Decision(xhat, False, reason="converging")

@@ -34,21 +34,19 @@ def train_mujoco_observer(distance: float = PAPER_DISTANCE, noise_scale: float =
         threads: threads stepping the transitions' physics (``mujoco.rollout``).
         progress: show a progress bar.
     """
-    from observer.training import generate_transitions, train_kkl
+    from observer.training import generate_transitions
 
-    from ..presets import observer_preset
+    from ..presets import train_preset
 
     system = GimbalSystem(noisier(WorldConfig(constants=LinkConstants(distance=distance)),
                                   noise_scale), threads=threads)
     # The default preset also at d = 0.2 without a bank: the low-light one lost the link
     # in the closed loop (availability 0.11 against 0.67; docs/physics.md).
-    preset, cfg = observer_preset(design or bank_preset(noise_scale), system.Te)
-    cfg.n_samples, cfg.seed = samples, seed
     t0 = time.perf_counter()
-    data = generate_transitions(system, cfg.n_samples, cfg.u_bar,
-                                np.random.default_rng(cfg.seed))
+    data = generate_transitions(system, samples, 0.0, np.random.default_rng(seed))
     t_data = time.perf_counter() - t0
     system.close()
-    obs, report = train_kkl(system, preset, cfg, data=data, progress=progress)
+    obs, report = train_preset(system, design or bank_preset(noise_scale), samples, seed,
+                               data=data, progress=progress)
     return obs, report, {"data": {"source": "MuJoCo (set state, step Te)",
                                   "seconds": t_data}}

@@ -1,0 +1,102 @@
+"""Maps that depend continuously on the observer's gain: one tanh hidden layer shared by
+every gain, and output weights tabulated on a grid of gains (and noise levels),
+interpolated linearly in log.
+
+For a fixed hidden layer the exact least-squares output layer of T is a smooth (rational)
+function of the eigenvalues; solving it on a fine grid of gains and interpolating gives
+T(x; w) for every w of the range, each grid point as precise as a fixed-gain observer
+(the same holds for T*'s output layer). A single network with w as an extra input was
+measured 5-10x less precise for the same features (``docs/ablation.md``).
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+
+def _bracket(grid: np.ndarray, v: float) -> tuple[int, float]:
+    """(i, t): v lies at (1 - t) grid[i] + t grid[i + 1], clipped to the grid."""
+    if grid.size == 1:
+        return 0, 0.0
+    v = min(max(v, grid[0]), grid[-1])
+    i = int(min(np.searchsorted(grid, v, side="right") - 1, grid.size - 2))
+    return i, float((v - grid[i]) / (grid[i + 1] - grid[i]))
+
+
+class GainTableMap:
+    """``coef(log w, log s) @ [tanh(W1 v + b1), 1]``.
+
+    Args:
+        W1, b1: the hidden layer, shapes (H, n_in), (H,); or one per grid gain, shapes
+            (n_w, H, n_in), (n_w, H) (each gain's inputs spread differently), in which
+            case the outputs of the two grid gains around w are interpolated.
+        coef: output weights, shape (n_w, n_s, n_out, H + 1).
+        log_w: the grid of log gains, increasing, shape (n_w,).
+        log_s: the grid of log noise levels, increasing, shape (n_s,) (one point: no
+            noise dependence).
+    """
+
+    def __init__(self, W1, b1, coef, log_w, log_s):
+        self.W1, self.b1 = np.asarray(W1, float), np.asarray(b1, float)
+        self.coef = np.asarray(coef, float)
+        self.log_w, self.log_s = np.asarray(log_w, float), np.asarray(log_s, float)
+        self.shared = self.W1.ndim == 2
+        W1s = self.W1[None] if self.shared else self.W1
+        self._W1T = [np.ascontiguousarray(W.T) for W in W1s]
+        self._b1 = self.b1[None] if self.shared else self.b1
+        self._key, self._C = None, None
+
+    @property
+    def n_in(self) -> int:
+        return self.W1.shape[-1]
+
+    @property
+    def n_out(self) -> int:
+        return self.coef.shape[2]
+
+    def consistent(self) -> bool:
+        H = self.W1.shape[-2] if self.W1.ndim >= 2 else -1
+        n_w = self.log_w.size
+        hidden_ok = (self.W1.ndim == 2 and self.b1.shape == (H,)) or \
+            (self.W1.ndim == 3 and self.W1.shape[0] == n_w and self.b1.shape == (n_w, H))
+        return (hidden_ok and self.coef.ndim == 4
+                and self.coef.shape[0] == self.log_w.size and self.coef.shape[3] == H + 1
+                and self.coef.shape[1] == self.log_s.size and self.log_w.ndim == 1
+                and bool(np.all(np.diff(self.log_w) > 0)) and self.log_s.ndim == 1
+                and bool(np.all(np.diff(self.log_s) > 0)))
+
+    def _row(self, i: int, b: float, j: int) -> np.ndarray:
+        C = self.coef
+        return (1 - b) * C[i, j] + b * C[i, min(j + 1, C.shape[1] - 1)]
+
+    def weights(self, w: float, s: float = 1.0) -> tuple:
+        """(i, a, weights at grid gain i, at grid gain i + 1) for gain w and noise s;
+        for a shared hidden layer the interpolated weights alone (cached)."""
+        key = (w, s)
+        if key != self._key:
+            i, a = _bracket(self.log_w, float(np.log(w)))
+            j, b = _bracket(self.log_s, float(np.log(s)))
+            i1 = min(i + 1, self.coef.shape[0] - 1)
+            lo, hi = self._row(i, b, j), self._row(i1, b, j)
+            self._C = ((1 - a) * lo + a * hi) if self.shared else (i, a, lo, hi)
+            self._key = key
+        return self._C
+
+    def features(self, v: np.ndarray, i: int = 0) -> np.ndarray:
+        """The hidden layer (of grid gain i) plus a constant column."""
+        phi = np.tanh(np.asarray(v, float) @ self._W1T[i] + self._b1[i])
+        return np.concatenate([phi, np.ones(phi.shape[:-1] + (1,))], axis=-1)
+
+    def __call__(self, v: np.ndarray, w: float, s: float = 1.0) -> np.ndarray:
+        """The map at gain w and noise s, on inputs of shape (..., n_in)."""
+        if self.shared:
+            return self.features(v) @ self.weights(w, s).T
+        i, a, lo, hi = self.weights(w, s)
+        out = (1 - a) * (self.features(v, i) @ lo.T)
+        if a > 0:
+            out = out + a * (self.features(v, i + 1) @ hi.T)
+        return out
+
+    def arrays(self) -> dict[str, np.ndarray]:
+        return {"W1": self.W1, "b1": self.b1, "coef": self.coef, "log_w": self.log_w,
+                "log_s": self.log_s}

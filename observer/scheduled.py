@@ -1,0 +1,183 @@
+"""A KKL observer that tunes its own gain: maps learned over a continuous range of
+eigenvalue scales, and a schedule that slows the filters as the estimate settles.
+
+A fixed filter bank averages the noise over about its slowest time constant, while a
+Kalman filter's gain shrinks as it becomes sure. Here the bank's rates are scaled by one
+number ``w`` (the gain): eigenvalues ``l_i(w) = 1 - Te w r_i``. The encoder ``T(x; w)``
+and the decoder ``T*(z; w, s)`` are learned for every ``w`` of a range (and every noise
+level ``s``), in the normalised coordinates
+
+    z_i' = l_i(w) z_i + (1 - l_i(w)) y_j(i)        (each z_i an average of one power)
+
+so ``z`` keeps the size of ``y`` whatever ``w`` is. The schedule starts fast (``w`` high:
+the initial guess is forgotten in a fraction of a second) and slows down as the time
+since the last (re)start grows, like a Kalman filter's 1/k gain, to a floor set by the
+measured noise level. When ``w`` changes, ``z`` moves with it by the encoder's own
+change at the current estimate, ``z += T(x_hat; w') - T(x_hat; w)`` (the input
+correction Omega, with ``w`` as the input), so what ``z`` has averaged is kept.
+(Buisson-Fenet et al., "Towards gain tuning for numerical KKL observers", learn T as a
+function of the gain in the same way; ``docs/observer.md``.)
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from .estimator import Estimator, usable_mask
+from .gainmaps import GainTableMap
+from .scheduled_design import GainSchedule, ScheduledDesign
+from .system import DiscreteSystem
+
+__all__ = ["GainSchedule", "ScheduledDesign", "ScheduledKKL"]
+
+
+class ScheduledKKL(Estimator):
+    """The gain-scheduled KKL observer (numpy inference).
+
+    Args:
+        system: what it computes with (f for Omega, h for missing samples, Te).
+        design: the family of banks.
+        encoder_T: x -> z at gain w (:class:`~observer.gainmaps.GainTableMap`).
+        decoder_T_star: z -> x at gain w and noise s, for a state anywhere in the domain.
+        decoder_locked: the same for a state near the operating point (the design's
+            ``lock_box``), used while the first one's estimate is well inside that box
+            (None: never).
+        schedule: the gain schedule.
+        u_bar: the constant input the maps were learned for.
+        use_omega: apply the Omega(z, u) correction when u != u_bar.
+    """
+
+    name = "kkl"
+
+    def __init__(self, system: DiscreteSystem, design: ScheduledDesign, encoder_T: GainTableMap,
+                 decoder_T_star: GainTableMap, decoder_locked: GainTableMap | None = None,
+                 schedule: GainSchedule | None = None, u_bar: float = 0.0,
+                 use_omega: bool = True):
+        super().__init__(system)
+        design.check_stable(system.Te)
+        self.design = design
+        self.encoder_T, self.decoder_T_star = encoder_T, decoder_T_star
+        self.decoder_locked = decoder_locked
+        #: How much of the estimate is the locked decoder's (0: none, 1: all) [-].
+        self.locked = 0.0
+        self.schedule = schedule or GainSchedule()
+        self.u_bar, self.use_omega = float(u_bar), use_omega
+        self._channel = design.channel()
+        self.noise = 1.0  # measurement noise over the nominal, in the model's gain
+        self.reset()
+
+    @property
+    def q(self) -> int:
+        return self.design.q
+
+    def clip(self, w: float) -> float:
+        lo, hi = self.design.w_range
+        return min(max(w, lo), hi)
+
+    # -- the maps (batched) ----------------------------------------------------------
+
+    def encode(self, x, w=None) -> np.ndarray:
+        """z = T(x; w) (default: the current w)."""
+        return self.encoder_T(np.asarray(x, dtype=float), self.w if w is None else w)
+
+    def decode(self, z, w=None, noise=None) -> np.ndarray:
+        """x_hat = T*(z; w, s) (default: the current w and noise)."""
+        return self.decoder_T_star(np.asarray(z, dtype=float), self.w if w is None else w,
+                                   self.noise if noise is None else noise)
+
+    def _enc(self, x: np.ndarray, w: float) -> np.ndarray:
+        return self.encoder_T(x, w)
+
+    # -- the gain ----------------------------------------------------------------------
+
+    def set_noise(self, noise: float) -> None:
+        """The measurement noise over the nominal [-] the powers now carry (in the
+        model's gain): sets the schedule's floor and the decoder's noise input."""
+        lo, hi = self.design.noise_range
+        self.noise = min(max(float(noise), lo), hi)
+
+    def set_gain(self, w: float, x: np.ndarray | None = None, restart: bool = False) -> None:
+        """Run at gain ``w`` from now on; z moves by T(x; w) - T(x; w_old) at the
+        estimate ``x`` (default: the latest), so the estimate carries on and z keeps
+        what it has averaged. ``restart``: z = T(x; w) instead, forgetting the rest (a
+        jump of the gain after a kick: z's memory is of another motion, and carried
+        over it sent the estimate off by radians)."""
+        w = self.clip(float(w))
+        if w == self.w:
+            return
+        x = self._xhat if x is None else x
+        if x is not None:
+            self.z = self._enc(x, w) if restart else \
+                self.z + self._enc(x, w) - self._enc(x, self.w)
+        self._gain(w)
+
+    def _gain(self, w: float) -> None:
+        self.w = w
+        self._a = self.system.Te * self.design.rate_vector(w)
+
+    def _estimate(self) -> np.ndarray:
+        """The wide decoder's estimate, blended into the locked decoder's once it has
+        stayed inside half the locked box (averaged over 0.2 s; never leaving three
+        quarters of it, which releases the lock at once) for ``lock_after`` slowest
+        time constants
+        (z then holds no memory of a state outside it), over ``lock_ramp`` [s]. While
+        the estimate is outside the box (converging, a slew, a kick) the gain is at
+        least ``recover``: the filters slow down only near the operating point (a slow
+        bank during a slew lost the link in every seed)."""
+        sys_, box, sch = self.system, self.design.lock_box, self.schedule
+        x = self.decoder_T_star(self.z, self.w, self.noise)
+        off = float(np.max(np.abs(x - sys_.domain_center) / sys_.domain_halfwidth))
+        self._wide = off > box  # the clock holds at recover's time (see predict)
+        if self._wide and self.w < sch.recover_gain(self.noise):
+            self.set_gain(sch.recover_gain(self.noise), x, restart=True)
+            x = self.decoder_T_star(self.z, self.w, self.noise)
+        # Averaged over 0.2 s, so that the noise of a single phidot estimate does not
+        # restart the count.
+        self._off += min(sys_.Te / 0.2, 1.0) * (off - self._off)
+        if off > 0.75 * box:  # released at once: the locked decoder knows no such state
+            self._inside = 0.0
+        elif self._off <= 0.5 * box:
+            self._inside += sys_.Te
+        memory = sch.lock_after / self.design.rates(self.w)[0]
+        self.locked = 0.0 if self.decoder_locked is None else \
+            min(max((self._inside - memory) / sch.lock_ramp, 0.0), 1.0)
+        if self.locked > 0:
+            x = x + self.locked * (self.decoder_locked(self.z, self.w, self.noise) - x)
+        return x
+
+    # -- Estimator interface ---------------------------------------------------------
+
+    def reset(self, x0=None) -> None:
+        """Start again, fast: the schedule's clock restarts."""
+        self.k, self._inside, self.locked, self._off = 0, 0.0, 0.0, 1.0
+        self._wide = False
+        self._gain(self.clip(self.schedule.gain(0.0, self.noise)))
+        self._xhat, self._y = None, None
+        self.z = self._enc(self.initial_guess(x0), self.w)
+
+    def update(self, y) -> np.ndarray:
+        y = np.asarray(y, dtype=float)
+        self._xhat = self._estimate()
+        ok = usable_mask(self.system, y)
+        if not ok.all():  # hold the prediction: a missing power is replaced by h(x_hat)
+            y = np.where(ok, y, self.system.h(self._xhat))
+        self._y = y
+        return self._xhat
+
+    def predict(self, u) -> None:
+        a = self._a  # 1 - l_i(w)
+        z = self.z + a * (self._y[self._channel] - self.z)
+        moved = np.any(np.asarray(u, dtype=float) != self.u_bar)
+        if self.use_omega and moved:
+            f, xh = self.system.f, self._xhat
+            z = z + self._enc(f(xh, u), self.w) - self._enc(f(xh, self.u_bar), self.w)
+        self.z = z
+        self.k += 1
+        if self._wide:  # no slowing down while the estimate is outside the locked box
+            sch = self.schedule
+            t_wide = sch.time_of(sch.recover_gain(self.noise), self.noise)
+            self.k = min(self.k, int(round(t_wide / self.system.Te)))
+        w = self.clip(self.schedule.gain(self.k * self.system.Te, self.noise))
+        if max(w / self.w, self.w / w) >= self.schedule.step_ratio or \
+                (w != self.w and w == self.clip(self.schedule.floor(self.noise))):
+            self.set_gain(w)
