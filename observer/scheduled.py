@@ -1,22 +1,25 @@
 """A KKL observer that tunes its own gain: maps learned over a continuous range of
-eigenvalue scales, and a schedule that slows the filters as the estimate settles.
+filter gains, and a schedule that slows the filters as the estimate settles.
 
 A fixed filter bank averages the noise over about its slowest time constant, while a
-Kalman filter's gain shrinks as it becomes sure. Here the bank's rates are scaled by one
-number ``w`` (the gain): eigenvalues ``l_i(w) = 1 - Te w r_i``. The encoder ``T(x; w)``
-and the decoder ``T*(z; w, s)`` are learned for every ``w`` of a range (and every noise
-level ``s``), in the normalised coordinates
+Kalman filter's gain shrinks as it becomes sure. Here one number ``w`` (the gain) sets
+the bank: at gain w each output's filters have rates from ``slowest x w`` to
+``fastest`` (:class:`~observer.scheduled_design.ScheduledDesign`), eigenvalues
+``l_i(w) = 1 - Te r_i(w)``. The encoder ``T(x; w)`` and the decoder ``T*(z; w, s)``
+are learned for every ``w`` of a range (and every noise level ``s``), in the averaged
+coordinates
 
     z_i' = l_i(w) z_i + (1 - l_i(w)) y_j(i)        (each z_i an average of one power)
 
-so ``z`` keeps the size of ``y`` whatever ``w`` is. The schedule starts fast (``w`` high:
-the initial guess is forgotten in a fraction of a second) and slows down as the time
-since the last (re)start grows, like a Kalman filter's 1/k gain, to a floor set by the
+so ``z`` keeps the size of ``y`` whatever ``w`` is. The schedule starts fast (the
+initial guess is forgotten in a fraction of a second) and slows down as the time since
+the last (re)start grows, like a Kalman filter's 1/k gain, to a floor set by the
 measured noise level. When ``w`` changes, ``z`` moves with it by the encoder's own
 change at the current estimate, ``z += T(x_hat; w') - T(x_hat; w)`` (the input
-correction Omega, with ``w`` as the input), so what ``z`` has averaged is kept.
-(Buisson-Fenet et al., "Towards gain tuning for numerical KKL observers", learn T as a
-function of the gain in the same way; ``docs/observer.md``.)
+correction Omega, with ``w`` as the input), so what ``z`` has averaged is kept. Near
+the operating point a second decoder, trained on states near it, takes over once the
+estimate has settled there. (Buisson-Fenet et al., "Towards gain tuning for numerical
+KKL observers", learn T as a function of the gain; ``docs/observer.md``.)
 """
 
 from __future__ import annotations
@@ -117,24 +120,24 @@ class ScheduledKKL(Estimator):
 
     def _estimate(self) -> np.ndarray:
         """The wide decoder's estimate, blended into the locked decoder's once it has
-        stayed inside half the locked box (averaged over 0.2 s; never leaving three
-        quarters of it, which releases the lock at once) for ``lock_after`` slowest
-        time constants
-        (z then holds no memory of a state outside it), over ``lock_ramp`` [s]. While
-        the estimate is outside the box (converging, a slew, a kick) the gain is at
-        least ``recover``: the filters slow down only near the operating point (a slow
-        bank during a slew lost the link in every seed)."""
+        stayed inside half the locked box for ``lock_after`` slowest time constants (z
+        then holds no memory of a state outside it), over ``lock_ramp`` [s]; released
+        when it leaves three quarters of the box. While the estimate is outside the box
+        (converging, a slew, a kick) the gain is at least ``recover``: the filters slow
+        down only near the operating point (a slow bank during a slew lost the link in
+        every seed). These tests read the estimate's distance from the operating point
+        averaged over ``settle_off`` [s], so that a weak link's noise does not trip
+        them, or at once for a jump of ``jump`` boxes (a kick)."""
         sys_, box, sch = self.system, self.design.lock_box, self.schedule
         x = self.decoder_T_star(self.z, self.w, self.noise)
         off = float(np.max(np.abs(x - sys_.domain_center) / sys_.domain_halfwidth))
-        self._wide = off > box  # the clock holds at recover's time (see predict)
+        self._off += min(sys_.Te / sch.settle_off, 1.0) * (off - self._off)
+        jump = off > sch.jump * box
+        self._wide = self._off > box or jump  # the clock holds (see predict)
         if self._wide and self.w < sch.recover_gain(self.noise):
             self.set_gain(sch.recover_gain(self.noise), x, restart=True)
             x = self.decoder_T_star(self.z, self.w, self.noise)
-        # Averaged over 0.2 s, so that the noise of a single phidot estimate does not
-        # restart the count.
-        self._off += min(sys_.Te / 0.2, 1.0) * (off - self._off)
-        if off > 0.75 * box:  # released at once: the locked decoder knows no such state
+        if self._off > 0.75 * box or jump:
             self._inside = 0.0
         elif self._off <= 0.5 * box:
             self._inside += sys_.Te

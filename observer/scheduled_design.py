@@ -116,6 +116,9 @@ class GainSchedule:
         lock_after: slowest time constants the estimate must stay inside the locked
             box before the locked decoder takes over [-].
         lock_ramp: how long the take-over takes [s].
+        settle_off: averaging time of the estimate's distance from the operating point
+            for the lock and recover tests [s].
+        jump: a distance of this many locked boxes acts at once (a kick) [-].
     """
 
     start: float = 2.0
@@ -127,12 +130,16 @@ class GainSchedule:
     step_ratio: float = 1.05
     lock_after: float = 1.0
     lock_ramp: float = 0.5
+    settle_off: float = 0.1
+    jump: float = 3.0
 
     def __post_init__(self):
-        positive = (self.start, self.settle, self.quiet, self.recover, self.lock_ramp)
+        positive = (self.start, self.settle, self.quiet, self.recover, self.lock_ramp,
+                    self.settle_off, self.jump)
         if min(positive) <= 0 or self.step_ratio < 1 or \
                 min(self.noise_power, self.start_power, self.lock_after) < 0:
-            raise ObserverError(f"{self!r}: start, settle, quiet, recover, lock_ramp > 0, "
+            raise ObserverError(f"{self!r}: start, settle, quiet, recover, lock_ramp, "
+                                "settle_off, jump > 0, "
                                 "noise_power, start_power, lock_after >= 0 and "
                                 "step_ratio >= 1 are needed")
 

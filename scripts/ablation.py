@@ -164,6 +164,16 @@ def recipe_table() -> list[str]:
     return lines
 
 
+#: The gain-scheduled KKL's alternatives are measured in the closed loop, by their own
+#: script.
+SCHEDULED = ["## The gain-scheduled KKL", "",
+             "The observer that tunes its own gain (`kkl` in the MuJoCo loop, "
+             "`docs/observer.md`) and its parts taken out one at a time (no locked "
+             "decoder, a fixed gain, other floors, no slower start on a noisy link) are "
+             "measured in the closed loop against the bank and the EKF by "
+             "`python scripts/scheduled_kkl.py`: [`scheduled_kkl.md`](scheduled_kkl.md)."]
+
+
 def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__,
                                  formatter_class=argparse.RawDescriptionHelpFormatter)
@@ -174,11 +184,11 @@ def main() -> None:
     old = path.read_text() if path.is_file() else ""
     marker = "## Gradient-trained maps"
     kept_recipe = old.split(marker)[0].rstrip("\n").split("\n") if marker in old else []
-    kept_gradient = (marker + old.split(marker)[1]).rstrip("\n").split("\n") \
-        if marker in old else []
+    kept_gradient = (marker + old.split(marker)[1].split(SCHEDULED[0])[0]).rstrip(
+        "\n").split("\n") if marker in old else []
     recipe = kept_recipe if args.only == "gradient" else recipe_table()
     gradient = kept_gradient if args.only == "recipe" else gradient_table()
-    atomic_write_text(path, "\n".join([*recipe, "", *gradient]) + "\n")
+    atomic_write_text(path, "\n".join([*recipe, "", *gradient, "", *SCHEDULED]) + "\n")
 
 
 if __name__ == "__main__":

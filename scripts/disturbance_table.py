@@ -18,7 +18,7 @@ from __future__ import annotations
 import argparse
 from pathlib import Path
 
-from ledsim.loop.config import LOOP_ESTIMATORS, RunConfig
+from ledsim.loop.config import COMPARED_ESTIMATORS, RunConfig
 from ledsim.loop.report import TABLE_HEADER, format_summary, run_many
 from ledsim.outputs import atomic_write_text
 from ledsim.physics.scene import INTEGRATORS
@@ -108,14 +108,14 @@ def main() -> None:
              "before), with the seeds that recovered; RTF: real-time factor of "
              "the whole loop. Runs are 10 s unless the case needs longer (occlusions of "
              "2 and 5 s, kick: 12-15 s). Every estimator runs under the same link "
-             "supervision (`ledsim/loop/supervisor.py`); the KKL is the one shipped bank "
-             "of d = 0.085 m observers for 1x-13x noise (`docs/supervision.md`) at every "
-             "distance, the filters use the model of the configured distance (and, in the "
+             "supervision (`ledsim/loop/supervisor.py`); the KKL is the one shipped "
+             "gain-scheduled KKL of d = 0.085 m (`docs/observer.md`) at every distance, "
+             "the filters use the model of the configured distance (and, in the "
              "rows marked so, the nominal model with the same gain tracker, as the KKL "
              "does). The vehicle keeps station on its thrusters and the control step uses "
              "its IMU, DVL and encoder (`docs/vehicle.md`).", "", TABLE_HEADER]
     results = []
-    runs = [(label, kw, LOOP_ESTIMATORS, True) for label, kw in CASES]
+    runs = [(label, kw, COMPARED_ESTIMATORS, True) for label, kw in CASES]
     runs += [(label, kw, ("kkl", "ekf"), False) for label, kw in UNSUPERVISED]
     runs += [(label, kw, BAYESIAN, True) for label, kw in NOMINAL]
     for label, kwargs, estimators, supervised in runs:

@@ -118,8 +118,8 @@ def main() -> None:
                         args.seeds)
             if "noisy" in label:  # what start_power is for: a weak link
                 far = measure(replace(still, estimator="kkl-scheduled", checkpoint=path,
-                                      distance=0.2), args.seeds)
-                label += f"; at d = 0.2 m availability {far['availability']:.3f}"
+                                      distance=0.25), args.seeds)
+                label += f"; at d = 0.25 m availability {far['availability']:.3f}"
             abl.append(f"| {label} | {r['availability']:.3f} | {fmt(r['x1'])} | "
                        f"{r['x1'] / ekf['x1']:.2f} |")
     text = "\n".join([

@@ -22,7 +22,7 @@ from __future__ import annotations
 import argparse
 from pathlib import Path
 
-from ledsim.loop.config import LOOP_ESTIMATORS, RunConfig
+from ledsim.loop.config import COMPARED_ESTIMATORS, RunConfig
 from ledsim.loop.report import TABLE_HEADER, format_summary, run_many
 from ledsim.outputs import atomic_write_text
 from ledsim.results import to_jsonable, write_json
@@ -88,7 +88,7 @@ def main() -> None:
     def run_rows(cases, variants):
         for label, kwargs in cases:
             for extra, tag in variants:
-                for est in LOOP_ESTIMATORS:
+                for est in COMPARED_ESTIMATORS:
                     cfg = RunConfig(scenario="align", estimator=est, seeds=args.seeds,
                                     particles=args.particles, **kwargs, **extra)
                     summary, _ = run_many(cfg, progress=False)

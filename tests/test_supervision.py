@@ -280,3 +280,22 @@ def test_the_scheduled_kkl_is_told_the_noise_of_a_far_link():
     est = loop.runs[0].step.estimator
     assert 4.0 < est.noise < 8.0
     assert est.w < est.schedule.floor(1.0)
+
+
+def test_a_confident_wrong_estimate_is_counted_as_a_silent_error():
+    from ledsim.config import LinkConstants
+    from ledsim.loop.metrics import run_metrics
+
+    c = LinkConstants()
+    n = 400  # 4 s
+    x = np.zeros((n, 2))
+    xhat = np.zeros((n, 2))
+    xhat[100:200, 0] = 0.3  # 1 s off by 0.3 rad, flag down
+    xhat[250:300, 0] = 0.5  # 0.5 s off, flagged lost: not silent
+    lost = np.zeros(n, bool)
+    lost[250:300] = True
+    power = np.ones((n, 2))
+    m = run_metrics(x, xhat, power, 1.0, c, lost=lost, warmup=1.0)
+    assert m.silent_error_share == pytest.approx(100 / 300)
+    assert run_metrics(x, xhat, power, 1.0, c, lost=lost, warmup=2.0).silent_error_share == 0
+    assert run_metrics(x, xhat, power, 1.0, c).silent_error_share == pytest.approx(150 / 400)

@@ -102,7 +102,7 @@ def run(args) -> int:
 
 def demo(args) -> int:
     """Align the receiver from 0.3 rad off with each estimator; print one table."""
-    from ..loop.config import LOOP_ESTIMATORS, RunConfig
+    from ..loop.config import COMPARED_ESTIMATORS, RunConfig
     from ..loop.report import TABLE_HEADER, format_summary, run_many, write_run
     from ..outputs import atomic_write_text
     from ..results import write_json
@@ -111,11 +111,11 @@ def demo(args) -> int:
     t0 = time.perf_counter()
     rows, summaries = [], []
     with output_folder(out) as tmp:
-        for est in LOOP_ESTIMATORS:
+        for est in COMPARED_ESTIMATORS:
             cfg = RunConfig(scenario="align", estimator=est, seeds=args.seeds,
                             scene=args.scene, **_vehicle(args))
             cfg.validate()
-            if est == LOOP_ESTIMATORS[0]:
+            if est == COMPARED_ESTIMATORS[0]:
                 _check_vehicle(cfg)
             summary, trace = run_many(cfg, progress=not args.quiet)
             write_run(summary, trace, tmp / est)

@@ -42,6 +42,9 @@ PHYSICS_SCENARIOS = {
 #: Estimators of the MuJoCo loop (``kkl-paper`` and ``kkl-handover`` exist for the
 #: closed-form model only).
 LOOP_ESTIMATORS = tuple(n for n in ESTIMATORS if n not in ("kkl-paper", "kkl-handover"))
+#: The loop's estimators each once, as tables and ``ledsim demo`` compare them
+#: (``kkl-scheduled`` is what ``kkl`` runs under supervision).
+COMPARED_ESTIMATORS = tuple(n for n in LOOP_ESTIMATORS if n != "kkl-scheduled")
 OMEGA_MODELS = ("identified", "simulator", "none")
 FILTER_DISTANCES = ("configured", "nominal")
 

@@ -48,6 +48,9 @@ class RunMetrics(DictAccess):
             in 0.9 of its share over the second before the event if that was lower [s];
             None without such an event or without recovery.
         lost_share: share of the run the supervisor flagged the link lost [-].
+        silent_error_share: share of the run after the warm-up in which the estimate
+            of phi is more than SILENT_ERROR off and the link is not flagged lost: a
+            confident wrong answer [-].
         link_events: each loss of the link as ``[t_lost, t_recovered]`` [s]
             (``t_recovered`` None when the run ended lost).
         detection_delay: from the start of a transient event to the first loss flagged
@@ -73,6 +76,11 @@ class RunMetrics(DictAccess):
     throughput_bps: float | None = None
     fec_share: float | None = None
     geometry_share: float = 1.0
+    silent_error_share: float = 0.0
+
+
+#: An estimate of phi this far off [rad] with the lost flag down is a silent error.
+SILENT_ERROR = 0.2
 
 
 def link_events(lost: np.ndarray, Te: float) -> list[list]:
@@ -100,7 +108,7 @@ def run_metrics(x: np.ndarray, xhat: np.ndarray, power_clean: np.ndarray, steady
                 lost: np.ndarray | None = None,
                 event_start: float | None = None,
                 power_max: np.ndarray | None = None,
-                noise_std: float | None = None) -> RunMetrics:
+                noise_std: float | None = None, warmup: float = 0.0) -> RunMetrics:
     """Metrics of one run from its true state, estimate and noise-free powers.
 
     Args:
@@ -114,6 +122,7 @@ def run_metrics(x: np.ndarray, xhat: np.ndarray, power_clean: np.ndarray, steady
         power_max: most P1 could receive at each step [W] (None: the peak at the
             configured distance, constant).
         noise_std: the sensor's noise [W] (None: no link budget).
+        warmup: the scenario's warm-up [s] (silent errors are counted after it).
     """
     Te = constants.Te
     e = rmse(xhat, x)
@@ -136,6 +145,10 @@ def run_metrics(x: np.ndarray, xhat: np.ndarray, power_clean: np.ndarray, steady
         after = [a for a, b in events if b is None or b > event_start + 1e-9]
         delay = max(after[0] - event_start, 0.0) if after else None
     budget = {} if noise_std is None else asdict(link_budget(p1, noise_std, Te))
+    flagged = np.zeros(len(x), bool) if lost is None else np.asarray(lost, dtype=bool)
+    wrong = (np.abs(xhat[:, 0] - x[:, 0]) > SILENT_ERROR) & ~flagged
+    after = np.arange(len(x)) * Te >= warmup
+    silent = float(np.mean(wrong[after])) if after.any() else 0.0
     return RunMetrics(
         rmse={"x1": float(e[0]), "x2": float(e[1])},
         rmse_steady={"x1": float(es[0]), "x2": float(es[1])},
@@ -145,7 +158,7 @@ def run_metrics(x: np.ndarray, xhat: np.ndarray, power_clean: np.ndarray, steady
         recovery_time=recovery,
         lost_share=0.0 if lost is None else float(np.mean(lost)),
         link_events=events, detection_delay=delay, geometry_share=float(np.mean(possible)),
-        **budget)
+        silent_error_share=silent, **budget)
 
 
 def _recovery(available: np.ndarray, Te: float, end: float, start: float) -> float | None:

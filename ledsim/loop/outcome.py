@@ -76,7 +76,8 @@ def outcome(res, xhat: np.ndarray, flags: np.ndarray, cfg: RunConfig, constants,
                           lost=flags[:, 0] if supervised else None,
                           event_start=events[0].start if events else None,
                           power_max=achievable_power(res, constants),
-                          noise_std=constants.measurement_noise_std * cfg.noise_scale)
+                          noise_std=constants.measurement_noise_std * cfg.noise_scale,
+                          warmup=cfg.scenario_spec.warmup)
     trace = Trace(res.t, res.x, xhat, res.power, res.power_clean, res.torque,
                   res.occluded, flags[:, 0], flags[:, 1]) if keep_trace else None
     return RunOutcome(metrics, 1e6 * spent / len(res.t),

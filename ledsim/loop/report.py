@@ -68,6 +68,7 @@ class RunSummary(DictAccess):
     mean_power: Stat
     recovery_time: Stat
     lost_share: Stat
+    silent_error_share: Stat
     detection_delay: Stat
     snr_db: Stat
     ber: Stat
@@ -102,6 +103,7 @@ def summarize(cfg: RunConfig, outs: list[RunOutcome]) -> RunSummary:
         mean_power=stat(lambda o: o.metrics.mean_power),
         recovery_time=stat(lambda o: o.metrics.recovery_time),
         lost_share=stat(lambda o: o.metrics.lost_share),
+        silent_error_share=stat(lambda o: o.metrics.silent_error_share),
         detection_delay=stat(lambda o: o.metrics.detection_delay),
         snr_db=stat(lambda o: o.metrics.snr_db),
         ber=stat(lambda o: o.metrics.ber),
