@@ -121,7 +121,14 @@ def main() -> int:
                     help="ledsim run's disturbance syntax (repeatable)")
     ap.add_argument("--seeds", type=int, default=4, help="evaluation episodes")
     ap.add_argument("--out", required=True, help="output folder")
+    ap.add_argument("--reference-only", action="store_true",
+                    help="re-evaluate only the shipped stack and the oracle in the "
+                    "results.json already in --out, keeping its trained policies' rows "
+                    "(the RL policies do not use ledsim's estimator: a change of it "
+                    "moves only these rows)")
     args = ap.parse_args()
+    if args.reference_only:
+        return reference_only(Path(args.out), args.seeds)
     try:
         if args.steps < 1:
             raise LedsimError(f"--steps {args.steps} is not allowed: must be >= 1")
@@ -139,7 +146,6 @@ def main() -> int:
     except LedsimError as exc:
         print(f"rl_baseline: error: {exc}", file=sys.stderr)
         return 2
-    from ledsim.envs import ShippedAlignmentPolicy
 
     dist = tuple(args.disturbance)
     results, curves = {}, {}
@@ -149,16 +155,40 @@ def main() -> int:
                           stack=8 if name == "ppo" else 1)
         results[name] = dict(**scores, train_seconds=seconds, env_steps=args.steps)
         print(name, results[name], flush=True)
-    for name, estimator in (("shipped_kkl", "kkl"), ("oracle", "oracle")):
-        scores = evaluate(lambda env, e=estimator: ShippedAlignmentPolicy(env.unwrapped, e),
-                          dist, args.seeds)
-        results[name] = dict(**scores, train_seconds=0.0, env_steps=0)
-        print(name, results[name], flush=True)
+    results.update(references(dist, args.seeds))
     with output_folder(out) as tmp:
         atomic_write_text(tmp / "results.json", json.dumps(
             {"disturbances": list(dist), "steps": args.steps, "eval_seeds": args.seeds,
              **results}, indent=2) + "\n")
         _plot(curves, tmp / "learning_curve.png")
+    return 0
+
+
+def references(dist: tuple, seeds: int) -> dict:
+    """The shipped stack's and the oracle's scores as policies of the same env."""
+    from ledsim.envs import ShippedAlignmentPolicy
+
+    results = {}
+    for name, estimator in (("shipped_kkl", "kkl"), ("oracle", "oracle")):
+        scores = evaluate(lambda env, e=estimator: ShippedAlignmentPolicy(env.unwrapped, e),
+                          dist, seeds)
+        results[name] = dict(**scores, train_seconds=0.0, env_steps=0)
+        print(name, results[name], flush=True)
+    return results
+
+
+def reference_only(out: Path, seeds: int) -> int:
+    """``--reference-only``: the reference rows of ``out/results.json`` again."""
+    path = out / "results.json"
+    try:
+        saved = json.loads(path.read_text())
+        dist = tuple(saved["disturbances"])
+    except (OSError, ValueError, KeyError):
+        print(f"rl_baseline: error: --reference-only needs a results.json of an earlier "
+              f"run in {str(out)!r}", file=sys.stderr)
+        return 2
+    saved.update(references(dist, saved.get("eval_seeds", seeds)))
+    atomic_write_text(path, json.dumps(saved, indent=2) + "\n")
     return 0
 
 

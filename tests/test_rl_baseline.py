@@ -43,3 +43,11 @@ def test_bad_input_is_one_line(tmp_path, args, needle):
     assert r.returncode == 2, r.stderr
     assert needle in r.stderr and len(r.stderr.strip().splitlines()) == 1, r.stderr
     assert not (tmp_path / "rl").exists()
+
+
+def test_reference_only_needs_an_earlier_run(tmp_path):
+    r = subprocess.run([sys.executable, str(SCRIPT), "--reference-only", "--out",
+                        str(tmp_path)], capture_output=True, text=True, timeout=300)
+    assert r.returncode == 2
+    assert "--reference-only needs a results.json" in r.stderr
+    assert len(r.stderr.strip().splitlines()) == 1
