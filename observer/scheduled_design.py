@@ -108,7 +108,8 @@ class GainSchedule:
         settle: time for the gain to halve from the start [s].
         quiet: the floor on a nominal link [-].
         noise_power: how the floor falls with the noise [-].
-        start_power: how the start (and ``recover``) fall with the noise [-].
+        start_power: how the start falls with the noise [-].
+        recover_power: how ``recover`` falls with the noise [-].
         recover: the least gain while the estimate is outside the locked box
             (converging, a slew, a kick), the clock held to match [-].
         step_ratio: w changes only by at least this factor (each change costs two
@@ -126,6 +127,7 @@ class GainSchedule:
     quiet: float = 0.7
     noise_power: float = 0.25
     start_power: float = 0.5
+    recover_power: float = 0.25
     recover: float = 1.0
     step_ratio: float = 1.05
     lock_after: float = 1.0
@@ -137,17 +139,18 @@ class GainSchedule:
         positive = (self.start, self.settle, self.quiet, self.recover, self.lock_ramp,
                     self.settle_off, self.jump)
         if min(positive) <= 0 or self.step_ratio < 1 or \
-                min(self.noise_power, self.start_power, self.lock_after) < 0:
+                min(self.noise_power, self.start_power, self.recover_power,
+                    self.lock_after) < 0:
             raise ObserverError(f"{self!r}: start, settle, quiet, recover, lock_ramp, "
                                 "settle_off, jump > 0, "
-                                "noise_power, start_power, lock_after >= 0 and "
+                                "noise_power, start_power, recover_power, lock_after >= 0 and "
                                 "step_ratio >= 1 are needed")
 
     def _scale(self, noise: float) -> float:
         return max(noise, 1e-9) ** self.start_power
 
     def recover_gain(self, noise: float) -> float:
-        return self.recover / self._scale(noise)
+        return self.recover / max(noise, 1e-9) ** self.recover_power
 
     def time_of(self, w: float, noise: float) -> float:
         """Time since the (re)start [s] at which the 1/t branch reaches w."""

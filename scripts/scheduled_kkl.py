@@ -71,7 +71,9 @@ def ablation_checkpoints(folder: Path) -> list[tuple[str, str]]:
                 (f"floor w = 1 instead of {base.schedule.quiet:g}",
                  replace(base.schedule, quiet=1.0), True),
                 ("no slower start on a noisy link (start_power 0)",
-                 replace(base.schedule, start_power=0.0), True)]
+                 replace(base.schedule, start_power=0.0), True),
+                ("recover gain falling as s**0.5 on a noisy link (recover_power 0.5)",
+                 replace(base.schedule, recover_power=0.5), True)]
     out = []
     for i, (label, schedule, locked) in enumerate(variants):
         obs = ckpt.load(src, base.system)
@@ -116,10 +118,12 @@ def main() -> None:
                                 file=sys.stderr):
             r = measure(replace(still, estimator="kkl-scheduled", checkpoint=path),
                         args.seeds)
-            if "noisy" in label:  # what start_power is for: a weak link
-                far = measure(replace(still, estimator="kkl-scheduled", checkpoint=path,
-                                      distance=0.25), args.seeds)
-                label += f"; at d = 0.25 m availability {far['availability']:.3f}"
+            if "noisy" in label or label.startswith("shipped"):  # where the noise powers act
+                far = [measure(replace(b, estimator="kkl-scheduled", checkpoint=path,
+                                       distance=d), args.seeds)["availability"]
+                       for b, d in ((still, 0.25), (base, 0.2))]
+                label += (f"; availability at d = 0.25 m, still hull {far[0]:.3f}, at "
+                          f"0.2 m keeping station {far[1]:.3f}")
             abl.append(f"| {label} | {r['availability']:.3f} | {fmt(r['x1'])} | "
                        f"{r['x1'] / ekf['x1']:.2f} |")
     text = "\n".join([
