@@ -127,7 +127,7 @@ class GainSchedule:
     quiet: float = 0.7
     noise_power: float = 0.25
     start_power: float = 0.5
-    recover_power: float = 0.25
+    recover_power: float = 0.5
     recover: float = 1.0
     step_ratio: float = 1.05
     lock_after: float = 1.0

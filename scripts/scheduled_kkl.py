@@ -72,8 +72,8 @@ def ablation_checkpoints(folder: Path) -> list[tuple[str, str]]:
                  replace(base.schedule, quiet=1.0), True),
                 ("no slower start on a noisy link (start_power 0)",
                  replace(base.schedule, start_power=0.0), True),
-                ("recover gain falling as s**0.5 on a noisy link (recover_power 0.5)",
-                 replace(base.schedule, recover_power=0.5), True)]
+                ("recover gain falling as s**0.25 on a noisy link (recover_power 0.25)",
+                 replace(base.schedule, recover_power=0.25), True)]
     out = []
     for i, (label, schedule, locked) in enumerate(variants):
         obs = ckpt.load(src, base.system)
