@@ -159,3 +159,13 @@ def test_kkl_scheduled_without_supervision_elsewhere_is_refused(tmp_path):
     r = run_cli("run", "--estimator", "kkl-scheduled", "--no-supervision", "--distance", "0.2",
                 "--out", str(tmp_path / "o"))
     assert_user_error(r, "kkl-scheduled")
+
+
+def test_the_shipped_checkpoint_is_what_train_design_scheduled_makes():
+    from dataclasses import asdict
+
+    from ledsim.resources import shipped_checkpoint
+
+    meta = ckpt.metadata(shipped_checkpoint(0.085, "mujoco", design="scheduled"))
+    assert meta["schedule"] == asdict(GainSchedule())
+    assert ScheduledDesign.from_dict(meta["scheduled_design"]) == ScheduledDesign()
