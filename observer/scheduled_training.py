@@ -22,7 +22,9 @@ import numpy as np
 from tqdm.auto import tqdm
 
 from .errors import ObserverError
+from .fitting import ridge_solve
 from .gainmaps import GainTableMap
+from .kkl import stationary_noise_covariance
 from .scheduled import GainSchedule, ScheduledDesign, ScheduledKKL
 from .system import DiscreteSystem
 
@@ -60,18 +62,13 @@ def random_hidden(low, high, hidden: int, scale: float, rng: np.random.Generator
     return W1, b - W1 @ shift
 
 
-def _solve(G: np.ndarray, rhs: np.ndarray, ridge: float) -> np.ndarray:
-    reg = ridge * np.trace(G) / G.shape[0]
-    return np.linalg.solve(G + reg * np.eye(G.shape[0]), rhs)
-
-
 def stationary_z_noise(design: ScheduledDesign, Te: float, w: float, s: float,
                        noise_std: np.ndarray, n: int, rng: np.random.Generator) -> np.ndarray:
     """n samples of z's stationary response to white measurement noise at gain w and
     noise s x nominal: per output j, z_i' = l_i z_i + (1 - l_i) v_j, so
     P_ik = (1 - l_i)(1 - l_k) sigma_j^2 s^2 / (1 - l_i l_k) within one output's bank."""
     a = Te * design.rates(w)
-    P = np.outer(a, a) / (1.0 - np.outer(1 - a, 1 - a))
+    P = stationary_noise_covariance(1.0 - a, a[:, None], [[1.0]])  # unit noise, one bank
     L = np.linalg.cholesky(P + 1e-14 * np.eye(a.size))
     nr = a.size
     out = np.empty((n, design.q))
@@ -108,7 +105,7 @@ def learn_encoder(system: DiscreteSystem, design: ScheduledDesign, x, xk, y, log
             j, r = divmod(i, design.n_rates)
             c = 1.0 / rates[r]
             A = c * c * DD + c * (DP + DP.T) + PP
-            coef[g, 0, i] = _solve(A, c * rD[:, j] + rP[:, j], cfg.ridge)
+            coef[g, 0, i] = ridge_solve(A, c * rD[:, j] + rP[:, j], cfg.ridge)
     return GainTableMap(W1, b1, coef, log_w, [0.0])
 
 
@@ -160,7 +157,7 @@ def learn_decoder(system: DiscreteSystem, design: ScheduledDesign, encoder: Gain
         probe = GainTableMap(W1[g], b1[g], np.zeros((1, 1, 1, H + 1)), [0.0], [0.0])
         for k, Zin in enumerate(noisy):
             F = probe.features(Zin)
-            coef[g, k] = _solve(F.T @ F, F.T @ xg, cfg.ridge).T
+            coef[g, k] = ridge_solve(F.T @ F, F.T @ xg, cfg.ridge).T
             err[g, k] = np.sqrt(((F @ coef[g, k].T - xg) ** 2).mean(axis=0))
             bar.update()
     bar.close()

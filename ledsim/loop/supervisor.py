@@ -88,12 +88,10 @@ class LinkSupervisor:
         self._gated, self.Te = 0, constants.Te
 
     def _tell_noise(self, noise_ratio: float) -> None:
-        """A gain-scheduled KKL (alone or the bank's active member) sets its gain's
-        floor and its decoder by the noise the rescaled powers carry."""
-        est = self.estimator
-        est = est.current if isinstance(est, ObserverBank) else est
-        if hasattr(est, "set_noise"):
-            est.set_noise(noise_ratio)
+        """A gain-scheduled KKL sets its gain's floor and its decoder by the noise the
+        rescaled powers carry (as the bank picks its member by it)."""
+        if hasattr(self.estimator, "set_noise"):
+            self.estimator.set_noise(noise_ratio)
 
     def noise_ratio(self) -> float:
         """Measurement noise in the model's gain over the model's nominal noise [-]: the
@@ -148,11 +146,12 @@ class LinkSupervisor:
             if np.isfinite(y).all():
                 self._lit = (float(xhat[0]), q)
             self.gain.update(y, self.monitor.noise_std * self.gain.ratio)
+            noise = self.noise_ratio()
             if isinstance(est, ObserverBank):
                 # The member trained for the noise the rescaled powers now carry.
-                if est.select(self.noise_ratio(), self.gain.normalize(y)):
+                if est.select(noise, self.gain.normalize(y)):
                     xhat = est.xhat
-            self._tell_noise(self.noise_ratio())
+            self._tell_noise(noise)
             return Decision(xhat, False)
         if t < self.warmup:  # still converging from the initial guess: not a lost link
             return Decision(xhat, False, reason="converging")
