@@ -161,6 +161,23 @@ class NavigationNoise:
         depth_noise: standard deviation of the pressure sensor's depth [m]: 2 mm, the
             0.2 mbar resolution of a Blue Robotics Bar30 (TE MS5837-30BA), read every
             control step.
+        magnetometer_noise: standard deviation of one magnetometer reading, each axis
+            [T]: 0.6 uT, the RMS noise of a Bosch BMM150 in its regular preset (the
+            heading reference; against the scene's 25 uT horizontal field, 1.4 deg a
+            reading).
+        magnetometer_rate: magnetometer readings per second [Hz]: 10 Hz, the BMM150's
+            output rate in that preset.
+        fix_latency: time from an acoustic fix's measurement to its arrival [s]: the
+            fix is of where the vehicle was then (a USBL's travel time and processing:
+            0.1-1 s at tens of metres). Allowed 0-5 s.
+        fix_range_error: a fix's error that grows with the slant range to the USBL
+            transceiver (the scene's ``usbl`` site), as a share of it [-]: the error's
+            standard deviation is ``hypot(fix_noise, fix_range_error * range)`` (USBL
+            systems quote 0.1-1 % of the slant range). Allowed 0-0.1.
+        fix_outlier_share: share of fixes that are outliers (multipath, a wrong
+            detection) [-]. Allowed 0-0.5.
+        fix_outlier_size: standard deviation of an outlier's extra error, each axis [m].
+            Allowed 0-100 m.
     """
 
     gyro_noise_density: float = math.radians(0.007)
@@ -175,17 +192,32 @@ class NavigationNoise:
     fix_noise: float = 0.03
     fix_rate: float = 1.0
     depth_noise: float = 0.002
+    magnetometer_noise: float = 0.6e-6
+    magnetometer_rate: float = 10.0
+    fix_latency: float = 0.0
+    fix_range_error: float = 0.0
+    fix_outlier_share: float = 0.0
+    fix_outlier_size: float = 1.0
 
     def __post_init__(self) -> None:
         for name in ("gyro_noise_density", "gyro_bias_instability", "accel_noise_density",
-                     "accel_bias_instability", "dvl_noise", "fix_noise", "depth_noise"):
+                     "accel_bias_instability", "dvl_noise", "fix_noise", "depth_noise",
+                     "magnetometer_noise"):
             value = getattr(self, name)
             if not (math.isfinite(value) and value >= 0):
                 raise ConfigError(f"{name}={value!r} is not allowed: must be >= 0 and finite")
-        for name in ("gyro_bias_time", "accel_bias_time", "dvl_rate", "fix_rate"):
+        for name in ("gyro_bias_time", "accel_bias_time", "dvl_rate", "fix_rate",
+                     "magnetometer_rate"):
             value = getattr(self, name)
             if not (math.isfinite(value) and value > 0):
                 raise ConfigError(f"{name}={value!r} is not allowed: must be > 0 and finite")
+        for name, high, unit in (("fix_latency", 5.0, " s"), ("fix_range_error", 0.1, ""),
+                                 ("fix_outlier_share", 0.5, ""),
+                                 ("fix_outlier_size", 100.0, " m")):
+            value = getattr(self, name)
+            if not (math.isfinite(value) and 0 <= value <= high):
+                raise ConfigError(f"{name}={value!r} is not allowed: must be in "
+                                  f"[0, {high:g}]{unit}")
         if not (isinstance(self.encoder_bits, int) and 1 <= self.encoder_bits <= 32):
             raise ConfigError(f"encoder_bits={self.encoder_bits!r} is not allowed: must be an "
                               "integer in 1..32")

@@ -9,8 +9,8 @@ from collections.abc import Iterable
 def parse_key_values(items: Iterable[str], allowed: Iterable[str], what: str,
                      error: type[Exception], integers: Iterable[str] = ()) -> dict:
     """``{key: number}`` from ``key=value`` items; keys in ``integers`` are ints, the rest
-    floats. A missing ``=``, a key not in ``allowed`` or a value that is not a number
-    raises ``error`` naming ``what`` (for example ``"current"``)."""
+    floats. A missing ``=``, a key not in ``allowed``, a key given twice or a value that
+    is not a number raises ``error`` naming ``what`` (for example ``"current"``)."""
     allowed, integers = list(allowed), set(integers)
     values = {}
     for item in items:
@@ -18,6 +18,8 @@ def parse_key_values(items: Iterable[str], allowed: Iterable[str], what: str,
         if not eq or key not in allowed:
             raise error(f"bad parameter {item!r} for {what}: use key=value with key in "
                         f"{', '.join(allowed)}")
+        if key in values:
+            raise error(f"{what}.{key} is given twice ({item!r}): give each key once")
         try:
             values[key] = int(text) if key in integers else float(text)
         except ValueError:

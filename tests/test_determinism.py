@@ -17,7 +17,8 @@ SHORT_SPECS = {"occlusion": "occlusion:start=0.3,duration=0.3",
                "vibration": "vibration:frequency=3,torque=1,force=4",
                "transmitter": "transmitter:sway=0.01,frequency=1,yaw=0.05",
                "kick": "kick:start=0.5,rate=2",
-               "waves": "waves:height=0.5,period=6"}
+               "waves": "waves:height=0.5,period=6",
+               "dvl_dropout": "dvl_dropout:start=0.2,duration=1"}
 
 
 def test_every_disturbance_has_a_short_spec():

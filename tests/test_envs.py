@@ -54,16 +54,17 @@ def test_shipped_kkl_and_controller_hold_the_link_as_a_policy():
     env = gym.make(ENV_ID)
     policy = ShippedAlignmentPolicy(env.unwrapped)
     obs, _ = env.reset(seed=0)
-    total, steps, truncated, phi = 0.0, 0, False, []
+    total, steps, truncated, rewards = 0.0, 0, False, []
     while not truncated:
         obs, reward, terminated, truncated, info = env.step(policy(obs))
         total += reward
         steps += 1
-        phi.append(info["phi"])
+        rewards.append(reward)
     assert steps == 1000 and not terminated
     assert total > 900  # 1000 would be the peak power at every step
-    # Aligned over the last 2 s (the station-keeping hull moves phi by a few 0.01 rad).
-    assert abs(np.mean(phi[-200:]) - 0.02) < 0.02
+    # The link held over the last 2 s: at least 95 % of the power the geometry allows
+    # (the station-keeping hull moves phi by a few 0.01 rad; the gimbal follows).
+    assert np.mean(rewards[-200:]) > 0.95
 
 
 def test_estimator_wrapper_adds_the_estimate():

@@ -25,14 +25,16 @@ def _check_vehicle(cfg) -> None:
     once with ``--no-imu`` (the run then has no station keeping)."""
     if cfg.scene is None:
         return
-    from ..physics.scene import VEHICLE_SENSORS
     from ..physics.world import LinkWorld
 
-    if LinkWorld(cfg.world_config()).ids.vehicle_sensors is not None:
+    ids = LinkWorld(cfg.world_config()).ids
+    if ids.vehicle_sensors is not None:
         return
     if cfg.imu:
-        raise LedsimError(f"the scene {cfg.scene} has no IMU, DVL, encoder or position-fix "
-                          f"sensor ({', '.join(VEHICLE_SENSORS)}): run it with --no-imu")
+        missing = ids.missing_sensors
+        raise LedsimError(f"the scene {cfg.scene} lacks the vehicle's sensor"
+                          f"{'s' if len(missing) > 1 else ''} {', '.join(missing)}: run it "
+                          "with --no-imu")
     log.warning(f"the scene {cfg.scene} has no vehicle sensors: no IMU and no station "
                 "keeping (the hull drifts with the water)")
 

@@ -220,6 +220,11 @@ def build_parser() -> argparse.ArgumentParser:
     rn.add_argument("--save-trace", action="store_true",
                     help="also write trace_seed<K>.npz per seed: t, phi, phidot, phi_hat, "
                          "phidot_hat, p1, p2, torque, lost (SI units, one row per step)")
+    rn.add_argument("--window", type=number(0.0, 86_400.0, "s", lo_open=True), default=None,
+                    help="also report the metrics of each window of this length [s] in "
+                    "results.json (windows: availability, FEC share, the hull's and the "
+                    "navigation's horizontal error), e.g. 60 for a long run minute by "
+                    "minute")
     rn.add_argument("--out", required=True, help="output folder")
 
     rd = command("render", "render a closed-loop run to an H.264 mp4 (headless)")

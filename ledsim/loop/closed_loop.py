@@ -41,7 +41,7 @@ from .estimation import (  # noqa: F401 (re-exported)
     loop_estimator,
 )
 from .gate import DropoutGate
-from .outcome import RunOutcome, Trace, achievable_power, outcome  # noqa: F401
+from .outcome import Navigation, RunOutcome, Trace, achievable_power, outcome  # noqa: F401
 from .supervisor import LinkSupervisor
 
 
@@ -147,6 +147,10 @@ class LoopRun:
         self.applied = np.empty(steps)
         self.xhat = np.empty((steps, 2))
         self.flags = np.zeros((steps, 2), dtype=bool)  # lost, acquiring
+        # The vehicle's navigated position [m] and its station (None: no vehicle).
+        self.navigated = np.full((steps, 3), np.nan)
+        v = self.vehicle
+        self.station = None if v is None else np.r_[v.home[0], v.surface]
         self.spent = 0.0  # s in the control step
 
     def control(self, k: int, t: float) -> float:
@@ -157,6 +161,8 @@ class LoopRun:
         self.state[k] = r.phi, r.phidot
         self.gimbal[k] = r.gimbal_angle, r.gimbal_rate
         self.hull[k], self.power[k], self.clean[k] = r.hull_pos, r.power, r.power_clean
+        if self.vehicle is not None:
+            self.navigated[k] = self.vehicle.navigation.position
         t0 = time.perf_counter()
         los = self.vehicle.los if self.aided else None
         torque = self.step(r.power, t, r.gimbal_angle, r.gimbal_rate, los)
@@ -212,10 +218,12 @@ class ClosedLoop:
                                      run.vehicle)
 
     def run(self, keep_trace: bool | Sequence[bool] = False,
-            progress: bool = False) -> list[RunOutcome]:
+            progress: bool = False, window: float | None = None) -> list[RunOutcome]:
         """Run every seed; one :class:`RunOutcome` per seed (in order). ``keep_trace``:
-        for all runs, or one flag per run. The real-time factor of each is the simulated
-        seconds over the wall time, times N (the throughput per run)."""
+        for all runs, or one flag per run; ``window`` [s]: also the metrics of each
+        window of that length (:mod:`ledsim.loop.windows`). The real-time factor of each
+        is the simulated seconds over the wall time, times N (the throughput per
+        run)."""
         runs, n, Te = self.runs, len(self.runs), self.Te
         keep = [keep_trace] * n if isinstance(keep_trace, bool) else list(keep_trace)
         torques = [0.0] * n
@@ -243,16 +251,20 @@ class ClosedLoop:
         times = np.arange(self.steps) * Te
         return [outcome(run.result(times), run.xhat, run.flags, self.cfg,
                         self.system.constants, run.disturbances, run.supervised,
-                        run.spent, wall / n, keep[i]) for i, run in enumerate(runs)]
+                        run.spent, wall / n, keep[i],
+                        None if run.station is None else
+                        Navigation(run.hull, run.station, run.navigated), window,
+                        run.vehicle is not None and run.vehicle.station_keeping)
+                for i, run in enumerate(runs)]
 
 
 def run_batch(cfg: RunConfig, seeds: Sequence[int], keep_trace: bool | Sequence[bool] = False,
-              threads: int = 1) -> list[RunOutcome]:
+              threads: int = 1, window: float | None = None) -> list[RunOutcome]:
     """The runs of ``cfg`` for ``seeds``, stepped together (see :class:`ClosedLoop`)."""
-    return ClosedLoop(cfg, seeds, threads).run(keep_trace)
+    return ClosedLoop(cfg, seeds, threads).run(keep_trace, window=window)
 
 
 def run_once(cfg: RunConfig, seed: int, keep_trace: bool = False, on_step=None,
-             progress: bool = False) -> RunOutcome:
+             progress: bool = False, window: float | None = None) -> RunOutcome:
     """One closed-loop run (see :class:`ClosedLoop`)."""
-    return ClosedLoop(cfg, [seed], on_step=on_step).run(keep_trace, progress)[0]
+    return ClosedLoop(cfg, [seed], on_step=on_step).run(keep_trace, progress, window)[0]

@@ -156,10 +156,12 @@ class EstimatorPart:
 @dataclass(frozen=True)
 class ExecutionPart:
     """How an experiment is run: Monte-Carlo runs (seeds 0..seeds-1) on ``workers``
-    processes. It never changes a seed's numbers."""
+    processes, and the window [s] of the per-window metrics it also reports (None:
+    none; :mod:`ledsim.loop.windows`). It never changes a seed's numbers."""
 
     seeds: int = 4
     workers: int = 2
+    window: float | None = None
 
 
 PARTS = {"world": WorldPart, "task": TaskPart, "estimation": EstimatorPart,
@@ -207,6 +209,7 @@ class RunConfig:
     imu: bool = EstimatorPart.imu
     imu_noise: tuple[str, ...] = WorldPart.imu_noise
     station_keeping_gains: tuple[str, ...] = WorldPart.station_keeping_gains
+    window: float | None = ExecutionPart.window
 
     @classmethod
     def of(cls, world: WorldPart = WorldPart(), task: TaskPart = TaskPart(),
@@ -245,7 +248,11 @@ class RunConfig:
                   ("--noise-scale", self.noise_scale, self.noise_scale > 0, "> 0"),
                   ("--particles", self.particles, self.particles >= 1, ">= 1")]
         if self.seconds is not None:
-            checks.append(("--seconds", self.seconds, self.seconds > 0, "> 0 s"))
+            Te = LinkConstants().Te
+            checks.append(("--seconds", self.seconds, self.seconds >= Te,
+                           f">= {Te:g} s (one control period)"))
+        if self.window is not None:
+            checks.append(("--window", self.window, self.window > 0, "> 0 s"))
         for flag, value, ok, allowed in checks:
             if not (ok and math.isfinite(value)):
                 raise LedsimError(f"{flag} {value!r} is not allowed: must be {allowed}")

@@ -51,6 +51,10 @@ class RunMetrics(DictAccess):
         silent_error_share: share of the run after the warm-up in which the estimate
             of phi is more than SILENT_ERROR off and the link is not flagged lost: a
             confident wrong answer [-].
+        hull_error_rms: the hull's horizontal distance from its station (the true pose
+            against the start's), RMS over the run [m] (None: no vehicle).
+        navigation_error_rms: the navigation's horizontal error (navigated against true
+            position), RMS over the run [m] (None: no vehicle).
         link_events: each loss of the link as ``[t_lost, t_recovered]`` [s]
             (``t_recovered`` None when the run ended lost).
         detection_delay: from the start of a transient event to the first loss flagged
@@ -77,6 +81,8 @@ class RunMetrics(DictAccess):
     fec_share: float | None = None
     geometry_share: float = 1.0
     silent_error_share: float = 0.0
+    hull_error_rms: float | None = None
+    navigation_error_rms: float | None = None
 
 
 #: An estimate of phi this far off [rad] with the lost flag down is a silent error.
@@ -101,6 +107,17 @@ def first_settled(flags: np.ndarray, Te: float, hold: float = 0.5) -> float | No
     run = np.convolve(ok.astype(int), np.ones(n_hold, dtype=int), mode="valid")
     idx = np.flatnonzero(run == n_hold)
     return None if idx.size == 0 else float(idx[0] * Te)
+
+
+def availability_mask(p1: np.ndarray, power_max: np.ndarray, noise_std: float | None
+                      ) -> tuple[np.ndarray, np.ndarray]:
+    """Per step: whether the link is available (P1 ``p1`` [W] at least
+    AVAILABILITY_LEVEL of the most it could receive, ``power_max`` [W], in a geometry
+    that allows a link) and whether the geometry allows one (``power_max`` at least
+    GEOMETRY_SNR noise standard deviations ``noise_std`` [W]; None: always)."""
+    floor = 0.0 if noise_std is None else GEOMETRY_SNR * noise_std
+    possible = power_max >= floor
+    return (p1 >= AVAILABILITY_LEVEL * power_max) & possible, possible
 
 
 def run_metrics(x: np.ndarray, xhat: np.ndarray, power_clean: np.ndarray, steady_from: float,
@@ -130,9 +147,7 @@ def run_metrics(x: np.ndarray, xhat: np.ndarray, power_clean: np.ndarray, steady
     aligned = np.abs(x[:, 0] - intensity_maximum(constants)) < ALIGN_TOLERANCE
     p1 = power_clean[:, 0]
     best = np.full(len(p1), peak_power(constants)) if power_max is None else power_max
-    floor = 0.0 if noise_std is None else GEOMETRY_SNR * noise_std
-    possible = best >= floor
-    available = (p1 >= AVAILABILITY_LEVEL * best) & possible
+    available, possible = availability_mask(p1, best, noise_std)
     recovery = None
     if event_end is not None:
         recovery = _recovery(available, Te, event_end,

@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 from dataclasses import dataclass
+from typing import NamedTuple
 
 import numpy as np
 
@@ -11,6 +12,7 @@ from ..control import receiver_peak
 from ..results import DictAccess
 from .config import RunConfig
 from .metrics import RunMetrics, run_metrics
+from .windows import WindowMetrics, horizontal_rms, window_metrics
 
 
 @dataclass
@@ -49,12 +51,25 @@ class Trace(DictAccess):
 @dataclass
 class RunOutcome(DictAccess):
     """One seed: its metrics, the estimator's cost [us per step], the loop's real-time
-    factor [-], and the trace when asked for."""
+    factor [-], the trace when asked for, the metrics of each window when asked for
+    (:class:`~ledsim.loop.windows.WindowMetrics`), and whether the vehicle kept station
+    (False: it drifted, or the scene has no vehicle)."""
 
     metrics: RunMetrics
     us_per_step: float
     realtime_factor: float
     trace: Trace | None = None
+    windows: list[WindowMetrics] | None = None
+    station_keeping: bool | None = None
+
+
+class Navigation(NamedTuple):
+    """A run's vehicle, step by step: the true hull position (N, 3) [m], its station
+    (3,) [m] and the navigated position (N, 3) [m]."""
+
+    hull: np.ndarray
+    station: np.ndarray
+    navigated: np.ndarray
 
 
 def achievable_power(res, c) -> np.ndarray:
@@ -66,19 +81,33 @@ def achievable_power(res, c) -> np.ndarray:
 
 def outcome(res, xhat: np.ndarray, flags: np.ndarray, cfg: RunConfig, constants,
             disturbances, supervised: bool, spent: float, wall: float,
-            keep_trace: bool) -> RunOutcome:
+            keep_trace: bool, navigation: Navigation | None = None,
+            window: float | None = None, station_keeping: bool | None = None
+            ) -> RunOutcome:
     """A run's :class:`RunOutcome` from its simulation result, its estimates, its
-    (lost, acquiring) flags per step, and the seconds spent controlling and in all."""
+    (lost, acquiring) flags per step, the seconds spent controlling and in all, its
+    vehicle's :class:`Navigation` (None: no vehicle) and the window [s] of per-window
+    metrics (None: none)."""
     events = [d for d in disturbances if d.event_end is not None]
     flags = flags.reshape(-1, 2)
+    best = achievable_power(res, constants)
+    noise = constants.measurement_noise_std * cfg.noise_scale
     metrics = run_metrics(res.x, xhat, res.power_clean, cfg.steady_from,
                           constants, events[0].event_end if events else None,
                           lost=flags[:, 0] if supervised else None,
                           event_start=events[0].start if events else None,
-                          power_max=achievable_power(res, constants),
-                          noise_std=constants.measurement_noise_std * cfg.noise_scale,
+                          power_max=best, noise_std=noise,
                           warmup=cfg.scenario_spec.warmup)
+    nav = navigation
+    if nav is not None and len(res.t):
+        metrics.hull_error_rms = horizontal_rms(nav.hull, np.broadcast_to(nav.station,
+                                                                          nav.hull.shape))
+        metrics.navigation_error_rms = horizontal_rms(nav.navigated, nav.hull)
+    windows = None if window is None else window_metrics(
+        res.power_clean[:, 0], best, noise, constants.Te, window,
+        *(() if nav is None else nav))
     trace = Trace(res.t, res.x, xhat, res.power, res.power_clean, res.torque,
                   res.occluded, flags[:, 0], flags[:, 1]) if keep_trace else None
-    return RunOutcome(metrics, 1e6 * spent / len(res.t),
-                      res.t[-1] / wall if len(res.t) else 0.0, trace)
+    return RunOutcome(metrics, 1e6 * spent / len(res.t) if len(res.t) else 0.0,
+                      res.t[-1] / wall if len(res.t) else 0.0, trace, windows,
+                      station_keeping)

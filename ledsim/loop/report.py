@@ -47,7 +47,10 @@ class RunSummary(DictAccess):
     ``link_events`` lists, per seed, each loss of the link as ``[t_lost, t_recovered]``
     [s]; ``recovery_time.n`` counts the seeds whose link came back after the event (of
     ``seeds``); ``imu`` says whether the control step used the vehicle's IMU, DVL and
-    encoder, ``station_keeping`` whether the vehicle held its pose."""
+    encoder, ``station_keeping`` whether the vehicle held its pose; ``hull_error_rms``
+    and ``navigation_error_rms`` [m] are the hull's horizontal distance from its station
+    and the navigation's horizontal error (None without a vehicle); ``windows`` (with
+    ``--window``) the metrics of each window over the seeds."""
 
     scenario: str
     estimator: str
@@ -83,6 +86,23 @@ class RunSummary(DictAccess):
     station_keeping: bool
     us_per_step: Stat
     realtime_factor: Stat
+    hull_error_rms: Stat | None = None
+    navigation_error_rms: Stat | None = None
+    windows: list | None = None
+
+
+#: The per-window metrics a summary gives over the seeds (:class:`WindowMetrics`).
+WINDOW_KEYS = ("availability", "fec_share", "mean_power", "hull_error_rms",
+               "navigation_error_rms")
+
+
+def summarize_windows(outs: list[RunOutcome]) -> list[dict] | None:
+    """Each window's metrics over the seeds (None: the runs have no windows)."""
+    if not outs or outs[0].windows is None:
+        return None
+    return [{"start": w.start, "end": w.end,
+             **{k: Stat.over(getattr(o.windows[j], k) for o in outs) for k in WINDOW_KEYS}}
+            for j, w in enumerate(outs[0].windows)]
 
 
 def summarize(cfg: RunConfig, outs: list[RunOutcome]) -> RunSummary:
@@ -116,14 +136,18 @@ def summarize(cfg: RunConfig, outs: list[RunOutcome]) -> RunSummary:
                      for k, o in enumerate(outs)],
         supervision=cfg.supervision,
         imu=cfg.imu,
-        station_keeping=cfg.station_keeps,
+        station_keeping=cfg.station_keeps and all(o.station_keeping is not False
+                                                  for o in outs),
         us_per_step=stat(lambda o: o.us_per_step),
-        realtime_factor=stat(lambda o: o.realtime_factor))
+        realtime_factor=stat(lambda o: o.realtime_factor),
+        hull_error_rms=stat(lambda o: o.metrics.hull_error_rms),
+        navigation_error_rms=stat(lambda o: o.metrics.navigation_error_rms),
+        windows=summarize_windows(outs))
 
 
 def _job(args) -> RunOutcome:
     cfg, seed, keep = args
-    return run_batch(cfg, [seed], keep_trace=keep)[0]
+    return run_batch(cfg, [seed], keep_trace=keep, window=cfg.window)[0]
 
 
 def run_seeds(cfg: RunConfig, progress: bool = True, all_traces: bool = False

@@ -44,7 +44,8 @@ CELL_COLUMNS = ("scenario", "estimator", "disturbance", "distance", "noise_scale
 METRIC_COLUMNS = ("rmse_x1", "rmse_x2", "rmse_steady_x1", "rmse_steady_x2",
                   "alignment_time", "availability", "mean_power", "recovery_time",
                   "lost_share", "detection_delay", "losses", "snr_db", "ber",
-                  "throughput_bps", "fec_share", "geometry_share")
+                  "throughput_bps", "fec_share", "geometry_share", "hull_error_rms",
+                  "navigation_error_rms")
 #: Columns that depend on the machine and its load: the only ones that may differ
 #: between backends or reruns.
 TIMING_COLUMNS = ("us_per_step", "realtime_factor")
@@ -138,7 +139,7 @@ def run_cell(job: tuple[RunConfig, Cell]) -> dict:
            "disturbance": cell.disturbance, "distance": cell.distance,
            "noise_scale": cell.noise_scale, "seed": cell.seed, "seconds": cfg.run_seconds,
            "supervision": cfg.supervision, "imu": cfg.imu,
-           "station_keeping": cfg.station_keeps,
+           "station_keeping": cfg.station_keeps and out.station_keeping is not False,
            "rmse_x1": m.rmse["x1"], "rmse_x2": m.rmse["x2"],
            "rmse_steady_x1": m.rmse_steady["x1"], "rmse_steady_x2": m.rmse_steady["x2"],
            "alignment_time": m.alignment_time, "availability": m.availability,
@@ -146,7 +147,8 @@ def run_cell(job: tuple[RunConfig, Cell]) -> dict:
            "lost_share": m.lost_share, "detection_delay": m.detection_delay,
            "snr_db": m.snr_db, "ber": m.ber, "throughput_bps": m.throughput_bps,
            "fec_share": m.fec_share, "geometry_share": m.geometry_share,
-           "losses": len(m.link_events),
+           "losses": len(m.link_events), "hull_error_rms": m.hull_error_rms,
+           "navigation_error_rms": m.navigation_error_rms,
            "us_per_step": out.us_per_step, "realtime_factor": out.realtime_factor}
     return {"version": __version__, "row": to_jsonable(row)}
 

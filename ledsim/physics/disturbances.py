@@ -14,6 +14,7 @@ waves             the orbital velocity of surface waves at the vehicle's depth
 transmitter       the LED platform sways sideways and rotates (yaw)
 occlusion         a plate crosses the line of sight for ``duration`` seconds
 kick              an angular-rate impulse to the gimbal or the hull at ``start``
+dvl_dropout       the DVL loses bottom lock for ``duration`` s (every ``every`` s)
 ================  ============================================================
 """
 
@@ -132,6 +133,7 @@ RANGES = {
     "height": (0.0, 20.0, "m", False),
     "period": (1.0, 30.0, "s", False),
     "depth": (1.0, 500.0, "m", False),
+    "every": (0.0, 3600.0, "s", False),
 }
 
 @dataclass
@@ -166,6 +168,40 @@ class Kick(Disturbance):
         return self.start
 
 
+@dataclass
+class DvlDropout(Disturbance):
+    """The DVL loses bottom lock (a soft seabed, a steep slope, the vehicle too high):
+    no velocity pings from ``start`` for ``duration`` s, again every ``every`` s (0:
+    once). The navigation coasts on the IMU and the acoustic fixes meanwhile.
+
+    Attributes:
+        start: time the first dropout begins [s].
+        duration: how long each lasts [s].
+        every: time from one dropout's start to the next's [s] (0: only one).
+    """
+
+    start: float = 2.0
+    duration: float = 5.0
+    every: float = 0.0
+
+    def __post_init__(self):
+        if self.every and self.every <= self.duration:
+            raise DisturbanceError(f"dvl_dropout.every={self.every:g} is not allowed: must "
+                                   f"be 0 (once) or longer than duration={self.duration:g} s")
+
+    def lost(self, t: float) -> bool:
+        """Whether the DVL is without bottom lock at ``t`` [s]."""
+        if t < self.start:
+            return False
+        since = t - self.start
+        if self.every:
+            since = math.fmod(since, self.every)
+        return since < self.duration
+
+    def apply(self, world: LinkWorld, t: float) -> None:
+        world.dvl_bottom_lock = not self.lost(t)
+
+
 DISTURBANCES = {
     "vibration": HullVibration,
     "current": WaterCurrent,
@@ -173,6 +209,7 @@ DISTURBANCES = {
     "transmitter": TransmitterMotion,
     "occlusion": Occlusion,
     "kick": Kick,
+    "dvl_dropout": DvlDropout,
 }
 
 

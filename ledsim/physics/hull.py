@@ -40,8 +40,24 @@ class HullAccess:
         mujoco.mj_sensorPos(m, d)  # writes sensordata only: the dynamics are untouched
         mujoco.mj_sensorVel(m, d)
         s, (g, a, v, e, p) = d.sensordata, adr
+        mag = self.ids.magnetometer
         return VehicleMotion(s[g:g + 3].copy(), s[a:a + 3].copy(), s[v:v + 3].copy(),
-                             float(s[e]), s[p:p + 3].copy())
+                             float(s[e]), s[p:p + 3].copy(),
+                             None if mag is None else s[mag:mag + 3].copy())
+
+    @property
+    def magnetic_field(self) -> np.ndarray:
+        """The Earth's magnetic field of the scene, world frame [T] (``opt.magnetic``):
+        what a vehicle's designer knows from a field model."""
+        return self.model.opt.magnetic.copy()
+
+    def usbl_range(self) -> float | None:
+        """Slant range from the USBL transceiver (the scene's ``usbl`` site) to the hull
+        [m] (None: the scene has none)."""
+        site = self.ids.usbl_site
+        if site is None:
+            return None
+        return float(np.linalg.norm(self.data.site_xpos[site] - self.hull_pos))
 
     def set_thrust(self, command) -> np.ndarray:
         """Command the hull's surge, sway and heave thrust [N] and pitch and yaw torque

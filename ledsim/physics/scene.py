@@ -127,8 +127,10 @@ def _set_yaw(element, angle: float) -> None:
 def build_spec(config: WorldConfig) -> mujoco.MjSpec:
     """Load the scene and apply ``config`` through MjSpec (no XML templating)."""
     path = Path(config.xml)
-    if not path.is_file():
+    if not path.exists():
         raise WorldError(f"scene file {str(path)!r} does not exist")
+    if not path.is_file():
+        raise WorldError(f"scene file {str(path)!r} is not a regular file")
     try:
         spec = mujoco.MjSpec.from_file(str(path))
     except Exception as exc:  # mujoco raises ValueError with the parser message
@@ -204,6 +206,12 @@ class SceneIds:
             :data:`VEHICLE_SENSORS` (None: the scene lacks one of them).
         thrusters: actuator ids of the hull's surge, sway, heave, pitch and yaw thrusters
             (None: the scene lacks one of them).
+        magnetometer: sensordata address of the IMU's magnetometer, the heading
+            reference (None: the scene has none; the navigation then has no heading
+            reference).
+        usbl_site: site id of the USBL transceiver the acoustic fixes are measured from
+            (None: the scene has none; a fix's error then does not grow with range).
+        missing_sensors: names of :data:`VEHICLE_SENSORS` the scene lacks.
     """
 
     hull_body: int
@@ -215,26 +223,34 @@ class SceneIds:
     motor: int
     vehicle_sensors: tuple[int, ...] | None = None
     thrusters: tuple[int, ...] | None = None
+    magnetometer: int | None = None
+    usbl_site: int | None = None
+    missing_sensors: tuple[str, ...] = ()
 
     @classmethod
     def of(cls, m) -> SceneIds:
         hinge = m.joint("gimbal_hinge")
         sensors = [m.sensor(i).name for i in range(m.nsensor)]
-        adr = (tuple(int(m.sensor(n).adr[0]) for n in VEHICLE_SENSORS)
-               if all(n in sensors for n in VEHICLE_SENSORS) else None)
+        missing = tuple(n for n in VEHICLE_SENSORS if n not in sensors)
+        adr = None if missing else tuple(int(m.sensor(n).adr[0]) for n in VEHICLE_SENSORS)
         actuators = [m.actuator(i).name for i in range(m.nu)]
         thrusters = (tuple(int(m.actuator(n).id) for n in THRUSTERS)
                      if all(n in actuators for n in THRUSTERS) else None)
+        mag = int(m.sensor(MAGNETOMETER).adr[0]) if MAGNETOMETER in sensors else None
+        sites = [m.site(i).name for i in range(m.nsite)]
+        usbl = int(m.site("usbl").id) if "usbl" in sites else None
         return cls(int(m.body("auv").id), int(m.body("gimbal").id),
                    (int(m.site("pd1").id), int(m.site("pd2").id)), int(m.site("led").id),
                    int(hinge.qposadr[0]), int(hinge.dofadr[0]),
-                   int(m.actuator("gimbal_motor").id), adr, thrusters)
+                   int(m.actuator("gimbal_motor").id), adr, thrusters, mag, usbl, missing)
 
 
 #: The vehicle's MuJoCo sensors by name: the IMU's gyro and accelerometer, the DVL (a
 #: velocimeter), the gimbal's encoder (jointpos) and the acoustic position fix (framepos).
 VEHICLE_SENSORS = ("imu_gyro", "imu_accel", "dvl_velocity", "gimbal_encoder",
                    "acoustic_fix")
+#: The IMU's magnetometer, the navigation's heading reference (optional in a scene).
+MAGNETOMETER = "imu_magnetometer"
 
 
 #: The hull's thrusters by name: surge, sway and heave forces [N], pitch and yaw
@@ -252,6 +268,8 @@ class VehicleMotion(NamedTuple):
         dvl: hull velocity at the DVL in its frame [m/s], (3,) (z points down).
         encoder: the gimbal hinge angle [rad].
         position: the IMU's position in the world frame [m], (3,).
+        magnetometer: the magnetic field in the IMU frame [T], (3,) (None: the scene
+            has no magnetometer).
     """
 
     gyro: np.ndarray
@@ -259,4 +277,5 @@ class VehicleMotion(NamedTuple):
     dvl: np.ndarray
     encoder: float
     position: np.ndarray
+    magnetometer: np.ndarray | None = None
 

@@ -22,6 +22,7 @@ set_thrust, thrust       surge, sway, heave; pitch, yaw thrusters    N; N m
 set_current              water velocity (MuJoCo's medium velocity)   m/s
 set_transmitter          LED platform pose and velocity              m, rad, m/s
 set_occluder             occluder plate position                     m
+dvl_bottom_lock          the DVL sees the seabed (False: no pings)   -
 cast_rays                where rays from a point are stopped          m
 =======================  ==========================================  ===========
 """
@@ -94,6 +95,8 @@ class LinkWorld(HullAccess):
         self.occluder_home = self.data.mocap_pos[self._occluder_mocap].copy()
         self.occluder_half_size = float(m.geom("occluder_plate").size[2])  # m
         self.transmitter_velocity = np.zeros(3)  # set by disturbances that move it
+        #: The DVL has bottom lock (a dropout disturbance takes it away for a while).
+        self.dvl_bottom_lock = True
         self._ray_buffers: dict[int, tuple[np.ndarray, np.ndarray]] = {}
         mujoco.mj_forward(m, self.data)
         self.initial_hull_pos = self.data.xpos[self._auv].copy()
@@ -108,6 +111,7 @@ class LinkWorld(HullAccess):
         self.data.mocap_pos[self._tx_mocap] = self.transmitter_home
         self.data.mocap_pos[self._occluder_mocap] = self.occluder_home
         self.transmitter_velocity[:] = 0
+        self.dvl_bottom_lock = True
         self.model.opt.wind[:] = 0
         mujoco.mj_forward(self.model, self.data)
 

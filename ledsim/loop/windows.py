@@ -1,0 +1,81 @@
+"""A long run window by window (a minute, say): does the link last, and does the hull?
+
+Per window of a run: the link's availability and FEC share, the mean power, the hull's
+horizontal distance from its station and the navigation's horizontal error. A run whose
+navigation drifts shows it here long before its whole-run averages move.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from ..linkbudget import link_budget
+from ..results import DictAccess
+from .metrics import availability_mask
+
+
+@dataclass
+class WindowMetrics(DictAccess):
+    """One window of a run.
+
+    Attributes:
+        start, end: the window [s].
+        availability: share of its steps with the link available (as
+            :class:`~ledsim.loop.metrics.RunMetrics`) [-].
+        fec_share: share of its steps under the FEC limit [-].
+        mean_power: mean noise-free P1 [W].
+        hull_error_rms: the hull's horizontal distance from its station, RMS [m]
+            (None: no vehicle).
+        navigation_error_rms: the navigation's horizontal error, RMS [m] (None: no
+            vehicle).
+    """
+
+    start: float
+    end: float
+    availability: float
+    fec_share: float
+    mean_power: float
+    hull_error_rms: float | None = None
+    navigation_error_rms: float | None = None
+
+
+def horizontal_rms(a: np.ndarray, b: np.ndarray) -> float:
+    """RMS of the horizontal distance between the rows of ``a`` and ``b`` (N, >= 2)
+    [m]."""
+    d = np.asarray(a)[:, :2] - np.asarray(b)[:, :2]
+    return float(np.sqrt(np.mean(np.sum(d * d, axis=1)))) if len(d) else float("nan")
+
+
+def window_metrics(p1: np.ndarray, power_max: np.ndarray, noise_std: float, Te: float,
+                   window: float, hull: np.ndarray | None = None,
+                   station: np.ndarray | None = None,
+                   navigated: np.ndarray | None = None) -> list[WindowMetrics]:
+    """The run in windows of ``window`` [s] (the last one may be shorter; a run shorter
+    than a window is one window), from photodiode 1's noise-free power ``p1`` and the
+    most it could receive ``power_max`` (N,) [W], the sensor noise [W] and the period
+    Te [s]; with a vehicle, the true hull position ``hull`` (N, 3) [m], its ``station``
+    (3,) [m] and the ``navigated`` position (N, 3) [m]."""
+    if not window > 0:
+        raise ValueError(f"window={window!r} is not allowed: must be > 0 s")
+    n = len(p1)
+    size = max(1, int(round(window / Te)))
+    available, _ = availability_mask(p1, power_max, noise_std)
+    out = []
+    for a in range(0, n, size):
+        b = min(n, a + size)
+        if out and b - a < size // 2:  # a short tail joins the last window
+            break
+        if b < n and n - b < size // 2:
+            b = n
+        budget = link_budget(p1[a:b], noise_std, Te)
+        vehicle = hull is not None and station is not None
+        out.append(WindowMetrics(
+            a * Te, b * Te, float(np.mean(available[a:b])), budget.fec_share,
+            float(np.mean(p1[a:b])),
+            horizontal_rms(hull[a:b], np.broadcast_to(station, hull[a:b].shape))
+            if vehicle else None,
+            horizontal_rms(navigated[a:b], hull[a:b])
+            if vehicle and navigated is not None else None))
+    return out

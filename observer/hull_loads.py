@@ -1,0 +1,80 @@
+"""What the water does to a hull, estimated from its IMU: a disturbance observer that
+acts only on what stands out of its own noise.
+
+The hull's equation per axis is ``M a = thrust + load``: the observer low-passes
+``M a - thrust`` (a from the IMU's velocity increments for the forces, from gyro
+differences for the torques), twice: fast (a gust) and slowly (a steady current, with
+less noise). Its noise in still water follows from the IMU's white noise through each
+low-pass (:func:`lowpass_covariance`), so it passes on only the part of each estimate
+beyond ``deadband`` of those standard deviations (:func:`soft_deadband`): a hull in
+still water is not pushed about by the IMU's noise.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+
+def soft_deadband(square, variance, k: float):
+    """The share of a noisy quantity to act on, from its ``square`` and its noise's
+    ``variance`` (floats or arrays): ``max(0, 1 - (k^2 variance / square)^2)``, a soft
+    deadband of ``k`` standard deviations: nothing within it, 80 % at 1.5 k, nearly all
+    of it well beyond. (The first power, James-Stein shrinkage, also halved the
+    stiffness at twice the deadband, which cost availability in currents.)"""
+    if not k:
+        return 1.0
+    if isinstance(square, float):
+        ratio = k * k * variance / max(square, 1e-300)
+        return 0.0 if ratio >= 1.0 else 1.0 - ratio * ratio
+    ratio = k * k * variance / np.maximum(square, 1e-300)
+    return np.maximum(0.0, 1.0 - np.minimum(ratio, 1.0) ** 2)
+
+
+def lowpass_covariance(k1: float, k2: float, r0, r1):
+    """Covariance of two first-order low-passes ``y += k (x - y)`` of gains k1 and k2
+    fed the same stationary input of autocovariance r0 (lag 0) and r1 (lag 1, none
+    beyond)."""
+    a1, a2 = 1.0 - k1, 1.0 - k2
+    return k1 * k2 * (r0 + r1 * (a1 + a2)) / (1.0 - a1 * a2)
+
+
+class HullLoadObserver:
+    """The disturbance observer of the module docstring, on the hull's surge, sway and
+    heave [N] and pitch and yaw [N m].
+
+    Args:
+        Te: update period [s].
+        mass: the hull's mass [kg] on the three forces and inertia [kg m^2] on the two
+            torques, (5,).
+        accel_noise_density: the accelerometer's [m/s^2/sqrt(Hz)].
+        gyro_noise_density: the gyro's [rad/s/sqrt(Hz)] (white, sampled each Te).
+        time, slow_time: the two low-passes' time constants [s].
+        deadband: in standard deviations of each estimate's own noise [-].
+    """
+
+    def __init__(self, Te: float, mass, accel_noise_density: float,
+                 gyro_noise_density: float, time: float, slow_time: float,
+                 deadband: float):
+        self.mass = np.asarray(mass, dtype=float)
+        self.deadband = deadband
+        self.load = np.zeros(5)  # fast [N, N m]
+        self.slow_load = np.zeros(5)
+        self.k_fast = min(1.0, Te / time)
+        self.k_slow = min(1.0, Te / slow_time)
+        accel = accel_noise_density**2 / Te * self.mass[:3]**2
+        gyro = gyro_noise_density**2 / (2 * Te) * (self.mass[3:] / Te)**2
+        r0, r1 = np.r_[accel, 2 * gyro], np.r_[0.0 * accel, -gyro]  # lag 0, 1
+        fast, slow = self.k_fast, self.k_slow
+        self.slow_variance = lowpass_covariance(slow, slow, r0, r1)
+        self.gust_variance = (lowpass_covariance(fast, fast, r0, r1) + self.slow_variance
+                              - 2 * lowpass_covariance(fast, slow, r0, r1))
+
+    def update(self, measured: np.ndarray) -> np.ndarray:
+        """One period with ``M a - thrust`` (5,) [N, N m] measured; returns the load to
+        cancel: the slow estimate and the fast one's excess (a gust), each beyond its
+        noise."""
+        self.load += self.k_fast * (measured - self.load)
+        self.slow_load += self.k_slow * (measured - self.slow_load)
+        gust, k = self.load - self.slow_load, self.deadband
+        return self.slow_load * soft_deadband(self.slow_load**2, self.slow_variance, k) \
+            + gust * soft_deadband(gust**2, self.gust_variance, k)
