@@ -50,13 +50,20 @@ class HullLoadObserver:
         gyro_noise_density: the gyro's [rad/s/sqrt(Hz)] (white, sampled each Te).
         time, slow_time: the two low-passes' time constants [s].
         deadband: in standard deviations of each estimate's own noise [-].
+        limit: the largest load the slow estimate believes per axis, (5,) [N, N m]
+            (None: any): what the thrusters can cancel. A strike's impulse is not a
+            steady load: a 3 rad/s yaw kick reads as 1e3 N m for one step, which the fast
+            estimate turns into a brake for a tenth of a second, but the slow one would
+            carry for seconds after it (8 seeds of a 3 rad/s hull kick: the oracle's
+            availability 0.811 with both clipped, 0.847 with the slow one alone).
     """
 
     def __init__(self, Te: float, mass, accel_noise_density: float,
                  gyro_noise_density: float, time: float, slow_time: float,
-                 deadband: float):
+                 deadband: float, limit=None):
         self.mass = np.asarray(mass, dtype=float)
         self.deadband = deadband
+        self.limit = None if limit is None else np.asarray(limit, dtype=float)
         self.load = np.zeros(5)  # fast [N, N m]
         self.slow_load = np.zeros(5)
         self.k_fast = min(1.0, Te / time)
@@ -74,6 +81,8 @@ class HullLoadObserver:
         cancel: the slow estimate and the fast one's excess (a gust), each beyond its
         noise."""
         self.load += self.k_fast * (measured - self.load)
+        if self.limit is not None:
+            measured = np.clip(measured, -self.limit, self.limit)
         self.slow_load += self.k_slow * (measured - self.slow_load)
         gust, k = self.load - self.slow_load, self.deadband
         return self.slow_load * soft_deadband(self.slow_load**2, self.slow_variance, k) \

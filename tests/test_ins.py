@@ -230,3 +230,39 @@ def test_the_faults_figures_are_checked(bad):
 
     with pytest.raises(ConfigError, match=next(iter(bad))):
         NavigationNoise(**bad)
+
+
+def test_the_load_observer_knows_its_own_noise_and_passes_only_real_loads():
+    """In still water its estimates carry the IMU's noise at the variance it computes,
+    and it passes on (nearly) nothing; a steady 2 N current and a gust pass; a strike's
+    impulse does not stay in the slow estimate."""
+    from observer.hull_loads import HullLoadObserver
+
+    mass = np.array([30.0, 30.0, 30.0, 4.0, 4.0])
+    n = NavigationNoise()
+    obs = HullLoadObserver(TE, mass, n.accel_noise_density, n.gyro_noise_density, 0.1,
+                           3.0, 4.0, limit=[100, 100, 100, 25, 25])
+    rng = np.random.default_rng(0)
+    accel_std = n.accel_noise_density / math.sqrt(TE)
+    gyro_std = n.gyro_noise_density / math.sqrt(2 * TE)
+    omega_prev = np.zeros(2)
+    fast, slow, passed = [], [], []
+    for _ in range(60_000):
+        omega = rng.standard_normal(2) * gyro_std
+        measured = np.r_[mass[:3] * rng.standard_normal(3) * accel_std,
+                         mass[3:] * (omega - omega_prev) / TE]
+        omega_prev = omega
+        passed.append(obs.update(measured))
+        fast.append(obs.load.copy())
+        slow.append(obs.slow_load.copy())
+    fast, slow = np.array(fast[1000:]), np.array(slow[1000:])
+    np.testing.assert_allclose(slow.var(axis=0), obs.slow_variance, rtol=0.15)
+    np.testing.assert_allclose((fast - slow).var(axis=0), obs.gust_variance, rtol=0.1)
+    assert np.mean(np.abs(passed[1000:])) < 0.01 * np.sqrt(obs.gust_variance).mean()
+    steady = np.r_[0.0, 2.0, 0.0, 0.0, 0.0]
+    for _ in range(1500):  # 15 s of a 2 N sideways current
+        out = obs.update(steady)
+    assert out[1] == pytest.approx(2.0, rel=0.01)
+    kick = obs.update(np.r_[0.0, 2.0, 0.0, 0.0, 1200.0])  # a yaw strike, one step
+    assert kick[4] > 100.0  # the fast estimate brakes it
+    assert obs.slow_load[4] < 0.1  # the slow one believes no more than 25 N m of it

@@ -68,6 +68,14 @@ class HullAccess:
         self.data.ctrl[list(ids)] = np.clip(np.asarray(command, dtype=float), lo, hi)
         return self.thrust
 
+    def thrust_limits(self) -> np.ndarray:
+        """The thrusters' limits: surge, sway, heave [N], pitch and yaw [N m] (their
+        ``ctrlrange``; zeros: none)."""
+        ids = self.ids.thrusters
+        if ids is None:
+            return np.zeros(5)
+        return np.abs(self.model.actuator_ctrlrange[list(ids)]).max(axis=1)
+
     @property
     def thrust(self) -> np.ndarray:
         """The thrusters' commands: surge, sway, heave [N], pitch and yaw [N m] (zeros:

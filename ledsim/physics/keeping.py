@@ -100,7 +100,8 @@ class StationKeeper:
         self.mass = world.hull_inertia()  # surge, sway, heave [kg]; pitch, yaw [kg m^2]
         self.loads = HullLoadObserver(Te, self.mass, noise.accel_noise_density,
                                       noise.gyro_noise_density, gains.observer_time,
-                                      gains.slow_observer_time, gains.load_deadband)
+                                      gains.slow_observer_time, gains.load_deadband,
+                                      limit=world.thrust_limits())
         self.thrust = np.zeros(5)
         self._omega = np.zeros(3)
         self.k = 0
