@@ -93,6 +93,14 @@ class ObserverBank(Estimator):
 
     # -- Estimator interface ---------------------------------------------------------
 
+    def adapt_noise(self, noise_ratio: float, y=None):
+        """Before the run (``y`` None) :meth:`start_with`, then :meth:`select`; the new
+        estimate when it switched."""
+        if y is None:
+            self.start_with(noise_ratio)
+            return None
+        return self.xhat if self.select(noise_ratio, y) else None
+
     def seed_run(self, seed: int) -> None:
         for m in self.members:
             m.seed_run(seed)

@@ -42,6 +42,16 @@ class Estimator(ABC):
     def seed_run(self, seed: int) -> None:  # noqa: B027 (deterministic estimators: no-op)
         """Tie the estimator's own random numbers (if any) to the seed of a run."""
 
+    def adapt_noise(self, noise_ratio: float, y: np.ndarray | None = None
+                    ) -> np.ndarray | None:
+        """The measurement noise the powers now carry, over the model's nominal [-]: an
+        estimator that adapts to it does (a bank picks its member, a gain-scheduled KKL
+        sets its floor); ``y`` is the step's measurement (None: before the run, where a
+        bank starts on its member at once). Returns the new estimate when adapting
+        changed it, else None. Estimators told their noise once (the EKF, UKF and
+        particle filter) keep it."""
+        return None
+
     def initial_guess(self, x0) -> np.ndarray:
         if x0 is None:
             return self.system.domain_center.astype(float).copy()

@@ -93,6 +93,11 @@ class ScheduledKKL(Estimator):
 
     # -- the gain ----------------------------------------------------------------------
 
+    def adapt_noise(self, noise_ratio: float, y=None):
+        """:meth:`set_noise`; the estimate stays (the gain follows at its next step)."""
+        self.set_noise(noise_ratio)
+        return None
+
     def set_noise(self, noise: float) -> None:
         """The measurement noise over the nominal [-] the powers now carry (in the
         model's gain): sets the schedule's floor and the decoder's noise input."""

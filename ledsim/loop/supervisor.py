@@ -16,7 +16,6 @@ from collections import deque
 
 import numpy as np
 
-from observer.bank import ObserverBank
 from observer.estimator import Estimator
 from observer.supervision import GainTracker, ResidualMonitor
 
@@ -71,9 +70,7 @@ class LinkSupervisor:
         model = estimator.system
         self.monitor = ResidualMonitor(model, noise_ratio=noise_ratio)
         self.sensor_noise = noise_ratio * gain_ratio  # in the model's nominal noise
-        if isinstance(estimator, ObserverBank):
-            estimator.start_with(noise_ratio)
-        self._tell_noise(noise_ratio)
+        estimator.adapt_noise(noise_ratio)
         self.gain = GainTracker(model, lambda y: pair_shape_inverse(y, constants),
                                 model_gain(model, constants), ratio=gain_ratio)
         self.scan = AcquisitionScan(constants, inertia)
@@ -87,12 +84,8 @@ class LinkSupervisor:
         self._anchor: tuple[float, float] | None = None  # ... when the gate closed
         self._gated, self.Te = 0, constants.Te
 
-    def _tell_noise(self, noise_ratio: float) -> None:
-        """A gain-scheduled KKL sets its gain's floor and its decoder by the noise the
-        rescaled powers carry (as the bank picks its member by it)."""
-        if hasattr(self.estimator, "set_noise"):
-            self.estimator.set_noise(noise_ratio)
-
+        self.sensor_noise = noise_ratio * gain_ratio  # in the model's nominal noise
+        estimator.adapt_noise(noise_ratio)
     def noise_ratio(self) -> float:
         """Measurement noise in the model's gain over the model's nominal noise [-]: the
         sensor's noise over the tracked gain. (Not the monitor's learned noise: fast
@@ -146,12 +139,11 @@ class LinkSupervisor:
             if np.isfinite(y).all():
                 self._lit = (float(xhat[0]), q)
             self.gain.update(y, self.monitor.noise_std * self.gain.ratio)
-            noise = self.noise_ratio()
-            if isinstance(est, ObserverBank):
-                # The member trained for the noise the rescaled powers now carry.
-                if est.select(noise, self.gain.normalize(y)):
-                    xhat = est.xhat
-            self._tell_noise(noise)
+            # A bank picks the member trained for the noise the rescaled powers now
+            # carry, a gain-scheduled KKL its floor by it.
+            adapted = est.adapt_noise(self.noise_ratio(), self.gain.normalize(y))
+            if adapted is not None:
+                xhat = adapted
             return Decision(xhat, False)
         if t < self.warmup:  # still converging from the initial guess: not a lost link
             return Decision(xhat, False, reason="converging")
