@@ -69,6 +69,9 @@ class Unsupervised:
     def __init__(self, estimator):
         self.estimator = estimator
 
+    #: The powers reach the estimator as they are (a link supervisor rescales them).
+    gain_ratio = 1.0
+
     def step(self, t: float, y: np.ndarray, q: float, qdot: float) -> Decision:
         return Decision(self.estimator.update(y), False)
 
@@ -205,6 +208,7 @@ class ControlStep:
         self.warmup = warmup
         self.decision: Decision | None = None
         self.u = 0.0
+        self.y_gated: np.ndarray | None = None  # what the gate passed on this step
         self._holding, self._last_command = False, 0.0
         self.load = None if model is None else LoadObserver(model)
         self._motor_u = 0.0  # the phi'' the motor gave last step [rad/s^2]
@@ -222,7 +226,8 @@ class ControlStep:
             load = 0.0 if self.load is None else \
                 self.load.update(qdot + los.hull_rate, self._motor_u)
             q, qdot = q - los.bearing, qdot - los.incidence_rate
-        d = self.supervisor.step(t, self.gate(y), q, qdot)
+        self.y_gated = self.gate(y)
+        d = self.supervisor.step(t, self.y_gated, q, qdot)
         if d.reseeded:
             self.law = self.law_template.start(self.constants)
         act = self.actuator

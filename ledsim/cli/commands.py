@@ -16,6 +16,7 @@ from ..config import PAPER_DISTANCE
 from ..errors import LedsimError
 from ..outputs import check_out_dir, check_out_file, output_folder, save_checkpoint
 from .checks import _check_vehicle, _vehicle, _warn_unserved
+from .replay_cmd import replay  # noqa: F401 (the replay command)
 
 log = logging.getLogger("ledsim")
 

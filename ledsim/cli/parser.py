@@ -176,6 +176,14 @@ def build_parser() -> argparse.ArgumentParser:
     ex.add_argument("--format", default="onnx", **_choices(("onnx",)), help="file format")
     ex.add_argument("--out", required=True, help="output file (.onnx)")
 
+    rp = command("replay", "feed a saved trace's estimator inputs to a fresh estimator "
+                 "(or an ONNX export) and compare the estimates")
+    rp.add_argument("trace", help="trace_seed<K>.npz from ledsim run --save-trace")
+    rp.add_argument("--onnx", help="an ONNX export of the run's fixed-gain KKL (ledsim "
+                    "export) to replay instead of the numpy estimator")
+    rp.add_argument("--json", action="store_true",
+                    help="print the result as JSON (max_abs_difference, ...)")
+
     sim = command("simulate", "run the MuJoCo world headless; save series + plot")
     sim.add_argument("--seconds", type=SECONDS, default=5.0, help="duration [s]")
     sim.add_argument("--torque-profile", default="zero", **_choices(TORQUE_PROFILES),
@@ -219,7 +227,8 @@ def build_parser() -> argparse.ArgumentParser:
     rn.add_argument("--no-plot", action="store_true", help="skip run.png")
     rn.add_argument("--save-trace", action="store_true",
                     help="also write trace_seed<K>.npz per seed: t, phi, phidot, phi_hat, "
-                         "phidot_hat, p1, p2, torque, lost (SI units, one row per step)")
+                         "phidot_hat, p1, p2, torque, lost (SI units, one row per step) "
+                         "and what the estimator was given, for ledsim replay")
     rn.add_argument("--window", type=number(0.0, 86_400.0, "s", lo_open=True), default=None,
                     help="also report the metrics of each window of this length [s] in "
                     "results.json (windows: availability, FEC share, the hull's and the "

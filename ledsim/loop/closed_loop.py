@@ -23,6 +23,7 @@ import numpy as np
 from tqdm.auto import tqdm
 
 from observer.oracle import Oracle
+from observer.recording import RecordingEstimator
 
 from ..optics import peak_power
 from ..physics.disturbances import parse_disturbance
@@ -41,6 +42,7 @@ from .estimation import (  # noqa: F401 (re-exported)
     loop_estimator,
 )
 from .gate import DropoutGate
+from .given import GivenRecord
 from .outcome import Navigation, RunOutcome, Trace, achievable_power, outcome  # noqa: F401
 from .supervisor import LinkSupervisor
 
@@ -90,13 +92,16 @@ def make_supervisor(cfg: RunConfig, system: GimbalSystem, estimator, estimator_s
 
 
 def run_supervisor(cfg: RunConfig, system: GimbalSystem, model, seed: int,
-                   truth: Callable[[], np.ndarray], reacquire: bool):
+                   truth: Callable[[], np.ndarray], reacquire: bool, record: bool = False):
     """The estimator of seed ``seed`` of ``cfg`` under its supervisor (the oracle, which
     reads ``truth``, and runs without supervision are :class:`Unsupervised`);
-    ``reacquire``: the supervisor may scan for a lost beam."""
+    ``reacquire``: the supervisor may scan for a lost beam; ``record``: the estimator
+    keeps every call it is given (:class:`~observer.recording.RecordingEstimator`)."""
     if cfg.estimator == "oracle":
         return Unsupervised(Oracle(system, truth))
     est, est_system = loop_estimator(cfg, system, model)
+    if record:
+        est = RecordingEstimator(est)
     est.seed_run(seed)
     est.reset()
     if not cfg.supervision:
@@ -105,12 +110,14 @@ def run_supervisor(cfg: RunConfig, system: GimbalSystem, model, seed: int,
 
 
 def control_step(cfg: RunConfig, system: GimbalSystem, model, seed: int, q_hold: float,
-                 truth: Callable[[], np.ndarray]) -> ControlStep:
+                 truth: Callable[[], np.ndarray], record: bool = False) -> ControlStep:
     """The control step of seed ``seed`` of ``cfg`` (``ledsim run``'s stack): dropout
     gate, the estimator under its supervisor (the oracle reads ``truth``), the
-    scenario's law, and the gimbal motor holding ``q_hold`` [rad] during the warm-up."""
+    scenario's law, and the gimbal motor holding ``q_hold`` [rad] during the warm-up;
+    ``record``: the estimator keeps what it is given."""
     spec = cfg.scenario_spec
-    supervisor = run_supervisor(cfg, system, model, seed, truth, spec.law.tracks_beam)
+    supervisor = run_supervisor(cfg, system, model, seed, truth, spec.law.tracks_beam,
+                                record)
     motor = GimbalMotor(system.inertia, q_hold, limit=system.config.torque_limit)
     return ControlStep(dropout_gate(system.constants, supervisor), supervisor, spec.law,
                        system.constants, motor, spec.warmup, model=model)
@@ -126,17 +133,19 @@ def dropout_gate(constants, supervisor) -> DropoutGate:
 
 class LoopRun:
     """One seed of a closed-loop run: its world, sensor, disturbances, control step, and
-    the record of every step (``steps`` rows)."""
+    the record of every step (``steps`` rows); with ``record``, also what its estimator
+    was given (:mod:`ledsim.loop.given`)."""
 
     def __init__(self, cfg: RunConfig, seed: int, system: GimbalSystem, model,
-                 world: LinkWorld, steps: int):
+                 world: LinkWorld, steps: int, record: bool = False):
         self.seed = seed
         self.world = world
         self.sensor, self.disturbances, self.vehicle = start_world(cfg, system, world, seed)
         self.aided = cfg.imu
         self.reading: SensorReading | None = None
         self.step = control_step(cfg, system, model, seed, world.gimbal_angle,
-                                 lambda: self.reading.x)
+                                 lambda: self.reading.x, record)
+        self.given = GivenRecord(steps) if record else None
         self.supervised = isinstance(self.step.supervisor, LinkSupervisor)
         self.geo = np.empty((steps, 4, 2))  # distance, theta, phi, visible fraction
         self.state = np.empty((steps, 2))
@@ -170,6 +179,8 @@ class LoopRun:
         d = self.step.decision
         self.xhat[k] = d.xhat
         self.flags[k] = d.lost, d.acquiring
+        if self.given is not None:
+            self.given.take(k, self.step, los)
         return torque
 
     def result(self, times: np.ndarray) -> SimulationResult:
@@ -186,10 +197,12 @@ class ClosedLoop:
         threads: threads stepping the physics (1: the calling thread).
         on_step: ``on_step(run, t)`` after each run's control step, before physics
             advances (the renderer uses it; ``run`` is the seed's :class:`LoopRun`).
+        record: keep what each run's estimator is given, for its trace (to replay it).
     """
 
     def __init__(self, cfg: RunConfig, seeds: Sequence[int] | int = 0, threads: int = 1,
-                 on_step: Callable[[LoopRun, float], None] | None = None):
+                 on_step: Callable[[LoopRun, float], None] | None = None,
+                 record: bool = False):
         seeds = [seeds] if isinstance(seeds, int | np.integer) else list(seeds)
         if not seeds:
             raise ValueError("no seeds to run")
@@ -204,7 +217,7 @@ class ClosedLoop:
         worlds = [self.system.world] + [
             LinkWorld(self.system.config, share_model_of=self.system.world if share else None)
             for _ in seeds[1:]]
-        self.runs = [LoopRun(cfg, int(s), self.system, self.model, w, self.steps)
+        self.runs = [LoopRun(cfg, int(s), self.system, self.model, w, self.steps, record)
                      for s, w in zip(seeds, worlds, strict=True)]
         self.threads = max(1, min(int(threads), len(self.runs)))
         bounds = np.linspace(0, len(self.runs), self.threads + 1).round().astype(int)
@@ -254,17 +267,22 @@ class ClosedLoop:
                         run.spent, wall / n, keep[i],
                         None if run.station is None else
                         Navigation(run.hull, run.station, run.navigated), window,
-                        run.vehicle is not None and run.vehicle.station_keeping)
+                        run.vehicle is not None and run.vehicle.station_keeping,
+                        None if run.given is None else
+                        run.given.series(run.step.estimator, self.cfg))
                 for i, run in enumerate(runs)]
 
 
 def run_batch(cfg: RunConfig, seeds: Sequence[int], keep_trace: bool | Sequence[bool] = False,
               threads: int = 1, window: float | None = None) -> list[RunOutcome]:
-    """The runs of ``cfg`` for ``seeds``, stepped together (see :class:`ClosedLoop`)."""
-    return ClosedLoop(cfg, seeds, threads).run(keep_trace, window=window)
+    """The runs of ``cfg`` for ``seeds``, stepped together (see :class:`ClosedLoop`);
+    a kept trace holds what the estimator was given."""
+    keep = keep_trace if isinstance(keep_trace, bool) else any(keep_trace)
+    return ClosedLoop(cfg, seeds, threads, record=keep).run(keep_trace, window=window)
 
 
 def run_once(cfg: RunConfig, seed: int, keep_trace: bool = False, on_step=None,
              progress: bool = False, window: float | None = None) -> RunOutcome:
     """One closed-loop run (see :class:`ClosedLoop`)."""
-    return ClosedLoop(cfg, [seed], on_step=on_step).run(keep_trace, progress, window)[0]
+    return ClosedLoop(cfg, [seed], on_step=on_step, record=keep_trace).run(
+        keep_trace, progress, window)[0]

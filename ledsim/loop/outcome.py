@@ -23,7 +23,8 @@ class Trace(DictAccess):
         t [s]; x, xhat: true and estimated (phi [rad], phidot [rad/s]); power,
         power_clean (N, 2) [W]; torque [N m]; occluded (N, 2): any aperture ray blocked;
         lost (N,): the supervisor did not trust the estimate; acquiring (N,): its
-        acquisition scan had the motor.
+        acquisition scan had the motor; given: what the estimator was given (None: not
+        kept; :mod:`ledsim.loop.given`), series by name.
     """
 
     t: np.ndarray
@@ -35,17 +36,19 @@ class Trace(DictAccess):
     occluded: np.ndarray
     lost: np.ndarray | None = None
     acquiring: np.ndarray | None = None
+    given: dict | None = None
 
     def series(self) -> dict[str, np.ndarray]:
         """The trace as 1-D arrays in SI units, one row per control step: ``t`` [s],
         ``phi``, ``phi_hat`` [rad], ``phidot``, ``phidot_hat`` [rad/s], ``p1``, ``p2``
-        (measured powers [W]), ``torque`` [N m], ``lost`` (bool)."""
+        (measured powers [W]), ``torque`` [N m], ``lost`` (bool); and, when kept, what the
+        estimator was given (:meth:`ledsim.loop.given.GivenRecord.series`)."""
         n = len(self.t)
         lost = np.zeros(n, dtype=bool) if self.lost is None else np.asarray(self.lost)
         return {"t": self.t, "phi": self.x[:, 0], "phidot": self.x[:, 1],
                 "phi_hat": self.xhat[:, 0], "phidot_hat": self.xhat[:, 1],
                 "p1": self.power[:, 0], "p2": self.power[:, 1], "torque": self.torque,
-                "lost": lost}
+                "lost": lost, **(self.given or {})}
 
 
 @dataclass
@@ -82,8 +85,8 @@ def achievable_power(res, c) -> np.ndarray:
 def outcome(res, xhat: np.ndarray, flags: np.ndarray, cfg: RunConfig, constants,
             disturbances, supervised: bool, spent: float, wall: float,
             keep_trace: bool, navigation: Navigation | None = None,
-            window: float | None = None, station_keeping: bool | None = None
-            ) -> RunOutcome:
+            window: float | None = None, station_keeping: bool | None = None,
+            given: dict | None = None) -> RunOutcome:
     """A run's :class:`RunOutcome` from its simulation result, its estimates, its
     (lost, acquiring) flags per step, the seconds spent controlling and in all, its
     vehicle's :class:`Navigation` (None: no vehicle) and the window [s] of per-window
@@ -107,7 +110,7 @@ def outcome(res, xhat: np.ndarray, flags: np.ndarray, cfg: RunConfig, constants,
         res.power_clean[:, 0], best, noise, constants.Te, window,
         *(() if nav is None else nav))
     trace = Trace(res.t, res.x, xhat, res.power, res.power_clean, res.torque,
-                  res.occluded, flags[:, 0], flags[:, 1]) if keep_trace else None
+                  res.occluded, flags[:, 0], flags[:, 1], given) if keep_trace else None
     return RunOutcome(metrics, 1e6 * spent / len(res.t) if len(res.t) else 0.0,
                       res.t[-1] / wall if len(res.t) else 0.0, trace, windows,
                       station_keeping)

@@ -86,6 +86,11 @@ class LinkSupervisor:
 
         self.sensor_noise = noise_ratio * gain_ratio  # in the model's nominal noise
         estimator.adapt_noise(noise_ratio)
+    @property
+    def gain_ratio(self) -> float:
+        """The link's gain over the model's that the powers are divided by [-]."""
+        return float(self.gain.ratio)
+
     def noise_ratio(self) -> float:
         """Measurement noise in the model's gain over the model's nominal noise [-]: the
         sensor's noise over the tracked gain. (Not the monitor's learned noise: fast

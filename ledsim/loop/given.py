@@ -1,0 +1,49 @@
+"""What the estimator of a closed-loop run was given, kept with its trace so that the
+run can be replayed (``ledsim replay``, :mod:`ledsim.loop.replay`).
+
+Per control step: which samples the dropout gate withheld, the input u [rad/s^2] the
+estimator was told (the motor's, the load's and the hull's parts), the hull's part of it,
+whether the supervisor re-seeded the estimator, and the gain the powers were divided by.
+With them, every call the estimator received (:mod:`observer.recording`) and the run's
+configuration: enough to give a fresh estimator of the same kind the same calls.
+"""
+
+from __future__ import annotations
+
+import json
+from dataclasses import asdict
+
+import numpy as np
+
+from observer.recording import RecordingEstimator
+
+
+class GivenRecord:
+    """The per-step part of the record, for a run of ``steps`` steps."""
+
+    def __init__(self, steps: int):
+        self.withheld = np.zeros((steps, 2), dtype=bool)
+        self.u = np.zeros(steps)
+        self.u_hull = np.zeros(steps)
+        self.reseeded = np.zeros(steps, dtype=bool)
+        self.gain = np.ones(steps)
+
+    def take(self, k: int, step, los) -> None:
+        """Step ``k`` of the :class:`~ledsim.step.ControlStep` ``step`` (``los``: the
+        vehicle's line of sight, None without the IMU)."""
+        self.withheld[k] = ~np.isfinite(step.y_gated)
+        self.u[k] = step.u
+        self.u_hull[k] = 0.0 if los is None else los.acceleration
+        self.reseeded[k] = step.decision.reseeded
+        self.gain[k] = step.supervisor.gain_ratio
+
+    def series(self, estimator, cfg) -> dict[str, np.ndarray]:
+        """The trace's series of what was given: the per-step ones, the estimator's
+        calls (when it recorded them: not the oracle's) and ``config``, the run's
+        configuration as JSON."""
+        out = {"withheld_p1": self.withheld[:, 0], "withheld_p2": self.withheld[:, 1],
+               "u": self.u, "u_hull": self.u_hull, "reseeded": self.reseeded,
+               "gain": self.gain, "config": np.array(json.dumps(asdict(cfg)))}
+        if isinstance(estimator, RecordingEstimator):
+            out.update(estimator.record.arrays())
+        return out
