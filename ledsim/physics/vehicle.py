@@ -21,7 +21,8 @@ Once per control step (:func:`ledsim.physics.tick.prepare`), :meth:`Vehicle.act`
    through d, so a wrong d scales this feed-forward, and the photodiodes correct the
    rest. w is low-passed and shrunk by the share of its power that is the sensors'
    noise (a Wiener gain from the noise figures), so a still hull's feed-forward does not
-   turn the gimbal by the DVL's noise;
+   turn the gimbal by the DVL's noise; the LED's bearing in the hull's frame integrates
+   it, anchored on the navigated pose (:class:`~observer.line_of_sight.LineOfSightFilter`);
 4. keeps station (unless told not to): a disturbance observer estimates the water's
    force and torque from the accelerometer and gyro (a fast one and a slow twin), the
    thrusters cancel it, and a soft PD on the navigated pose holds the home pose (surge,
@@ -34,11 +35,11 @@ Once per control step (:func:`ledsim.physics.tick.prepare`), :meth:`Vehicle.act`
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass
 
 import numpy as np
 
 from observer.ins import AidedINS, InertialNoise, InsState
+from observer.line_of_sight import LineOfSight, LineOfSightFilter
 
 from ..config import GRAVITY, NavigationNoise
 from .keeping import StationKeeper, StationKeeping
@@ -54,33 +55,6 @@ def inertial_noise(n: NavigationNoise) -> InertialNoise:
                          n.accel_noise_density, n.accel_bias_instability,
                          n.accel_bias_time, n.dvl_noise, n.depth_noise,
                          n.magnetometer_noise)
-
-
-@dataclass
-class LineOfSight:
-    """What the vehicle measured of the line of sight this step.
-
-    Attributes:
-        rate: the LED's bearing rate at the receiver from the hull's motion [rad/s].
-        acceleration: its change over the last step [rad/s^2]: the input the hull's
-            motion adds to phi'' (the gimbal itself is inertially free on its hinge).
-        hull_rate: the gyro's yaw rate [rad/s].
-        bearing: how far the LED's bearing in the hull's frame has turned since the
-            start [rad]: the integral of ``rate - hull_rate``, pulled over
-            ``bearing_time`` towards the bearing the navigated pose gives (the LED where
-            the start put it), and within ``reanchor_bearing_time`` after a violent
-            excursion, so a hull strike leaves no lasting error.
-    """
-
-    rate: float = 0.0
-    acceleration: float = 0.0
-    hull_rate: float = 0.0
-    bearing: float = 0.0
-
-    @property
-    def incidence_rate(self) -> float:
-        """phidot [rad/s] from the encoder rate is ``rate - hull_rate - qdot``."""
-        return self.rate - self.hull_rate
 
 
 def _cross(a, b) -> np.ndarray:
@@ -131,24 +105,17 @@ class Vehicle:
         self.home = (world.hull_pos[:2].copy(), world.hull_yaw)
         self.keeper = StationKeeper(world, Te, gains, n, self.home, self.surface) \
             if self.station_keeping else None
-        self.los = LineOfSight()
         self.reading: NavigationReading | None = None
-        self.k = 0  # steps taken
-        # The LOS rate: low-passed over rate_time, and its power over 0.5 s; the
-        # noise it carries [rad/s] from the sensors' figures: the DVL's through the
+        # The LOS rate's noise [rad/s] from the sensors' figures: the DVL's through the
         # navigation's velocity (about a ping's noise over the pings of 0.3 s), the
-        # gyro's through the gimbal's lever arm, then the low-pass.
-        self.k_rate, self.k_power = min(1.0, Te / rate_time), min(1.0, Te / 0.5)
+        # gyro's through the gimbal's lever arm, then the low-pass over rate_time.
         dvl = n.dvl_noise**2 / (2.0 * 0.3 * n.dvl_rate)
         lever2 = float(self.l_gimbal[0]**2 + self.l_gimbal[1]**2)
         gyro = n.gyro_noise_density**2 / (2 * Te) * lever2
-        self.rate_noise = math.sqrt(dvl + gyro * Te / (2 * rate_time)) / distance
-        self._raw = self._power = 0.0
-        self._anchor = 0.0
+        rate_noise = math.sqrt(dvl + gyro * Te / (2 * rate_time)) / distance
+        self.sight = LineOfSightFilter(Te, distance, rate_noise, rate_time, bearing_time,
+                                       reanchor_rate, reanchor_time, reanchor_bearing_time)
         # Where the start put the LED: d ahead of the hinge along the hull's axis.
-        self.k_bearing = min(1.0, Te / bearing_time)
-        self.reanchor_rate, self.reanchor_time = reanchor_rate, reanchor_time
-        self.k_reanchor = min(1.0, Te / reanchor_bearing_time)
         R0 = world.hull_rotation
         hinge0 = world.hull_pos[:2] + (R0 @ self.l_gimbal)[:2]
         self.led = hinge0 + distance * R0[:2, 0] / np.linalg.norm(R0[:2, 0])
@@ -188,30 +155,16 @@ class Vehicle:
         a = r.delta_velocity / self.Te - nav.accel_bias \
             - nav.attitude.T @ GRAVITY_REACTION
         v_g = self.velocity + _cross(omega, self.l_gimbal)
-        c, s = math.cos(r.encoder), math.sin(r.encoder)
-        raw = (-c * v_g[1] + s * v_g[0]) / self.distance
-        self._raw += self.k_rate * (raw - self._raw)
-        self._power += self.k_power * (self._raw**2 - self._power)
-        # Shrink by what of the rate's power is the sensors' noise (a Wiener gain): a
-        # still hull's feed-forward would only turn the gimbal by that noise.
-        rate = self._raw * max(0.0, 1.0 - self.rate_noise**2 / max(self._power, 1e-30))
-        accel = (rate - self.los.rate) / self.Te if self.k else 0.0
-        bearing = self.los.bearing + self.Te * (rate - float(omega[2]))
         nav_bearing = self._led_in_hull(nav)[0] - self._bearing0
-        # After a violent excursion re-anchor on the navigation's geometry: integrating
-        # w is a small-angle, one-sample-per-step account of the motion, wrong by
-        # tenths of a radian once a hull strike swings the hinge by a large part of d.
-        if abs(raw) > self.reanchor_rate:
-            self._anchor = self.reanchor_time
-        k = self.k_bearing
-        if self._anchor > 0:
-            k, self._anchor = self.k_reanchor, self._anchor - self.Te
-        bearing += k * math.remainder(nav_bearing - bearing, 2 * math.pi)
-        self.los = LineOfSight(rate, accel, float(omega[2]), bearing)
+        self.sight.update(v_g, r.encoder, float(omega[2]), nav_bearing)
         if self.keeper is not None:
             self.keeper.act(nav, self.ins.P, self.velocity, omega, a)
-        self.k += 1
         return self.los
+
+    @property
+    def los(self) -> LineOfSight:
+        """What the vehicle measured of the line of sight at its last step."""
+        return self.sight.los
 
     def _led_in_hull(self, nav: InsState) -> tuple[float, float]:
         """Where the LED is from the gimbal's hinge, by the navigated pose: its bearing
