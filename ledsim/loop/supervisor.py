@@ -17,6 +17,7 @@ from collections import deque
 import numpy as np
 
 from observer.estimator import Estimator
+from observer.occlusion import EncoderCarry
 from observer.supervision import GainTracker, ResidualMonitor
 
 from ..config import LinkConstants
@@ -58,9 +59,9 @@ class LinkSupervisor:
             are told it too); in the model's gain it scales as 1 / gain, so a bank of
             observers follows the tracked gain.
         dead_reckon: while a sample is gated out (an occlusion), the encoder in the line
-            of sight's frame carries the estimate, phi = phi_0 - (q - q_0) from the
-            last fully lit step, and the estimator restarts from it when the light
-            returns (for runs whose encoder angle is in that frame: the IMU's).
+            of sight's frame carries the estimate, and the estimator restarts from it
+            when the light returns (:class:`~observer.occlusion.EncoderCarry`; for runs
+            whose encoder angle is in that frame: the IMU's).
     """
 
     def __init__(self, estimator: Estimator, constants: LinkConstants, inertia: float,
@@ -79,10 +80,7 @@ class LinkSupervisor:
         # Encoder angles of the last trusted steps: a loss is flagged up to about 0.2 s
         # late, so the scan centres on the oldest, from before the trouble began.
         self.trusted_q: deque = deque(maxlen=max(1, int(round(0.3 / constants.Te))))
-        self.dead_reckon = dead_reckon
-        self._lit: tuple[float, float] | None = None  # (phi, q) of the last lit step
-        self._anchor: tuple[float, float] | None = None  # ... when the gate closed
-        self._gated, self.Te = 0, constants.Te
+        self.carry = EncoderCarry(constants.Te, DEAD_RECKON_AFTER) if dead_reckon else None
 
         self.sensor_noise = noise_ratio * gain_ratio  # in the model's nominal noise
         estimator.adapt_noise(noise_ratio)
@@ -101,37 +99,14 @@ class LinkSupervisor:
         """Move the estimator to the next step under input ``u`` [rad/s^2]."""
         self.estimator.predict(u)
 
-    def _dead_reckon(self, xhat, y, y_model, q: float, qdot: float) -> np.ndarray:
-        """The estimate while the gate holds a sample: the encoder's, from the last lit
-        step. When every sample is back after an occlusion (a hold of at least
-        DEAD_RECKON_AFTER; a dim link's short holds are not), the estimator restarts
-        from it."""
-        gated = not np.isfinite(y).all()
-        if gated:
-            self._gated += 1
-            if self._gated == 1:
-                self._anchor = self._lit
-        held, self._gated = self._gated, self._gated if gated else 0
-        if self._anchor is None:
-            return xhat
-        phi0, q0 = self._anchor
-        carried = np.array([phi0 - (q - q0), -qdot])
-        if gated:
-            return carried
-        self._anchor = None
-        if held * self.Te < DEAD_RECKON_AFTER:
-            return xhat
-        self.estimator.reset(carried)
-        return self.estimator.update(y_model)
-
     def step(self, t: float, y: np.ndarray, q: float, qdot: float) -> Decision:
         """Step ``t`` [s]: gated powers ``y`` [W], encoder angle ``q`` [rad] and rate
         ``qdot`` [rad/s]. The estimator has taken the measurement when this returns."""
         est, scan = self.estimator, self.scan
         y_model = self.gain.normalize(y)
         xhat = est.update(y_model)
-        if self.dead_reckon:
-            xhat = self._dead_reckon(xhat, y, y_model, q, qdot)
+        if self.carry is not None:
+            xhat = self.carry.step(est, xhat, y, y_model, q, qdot)
         lost = self.monitor.update(y_model, xhat)
         blind = not np.isfinite(y).any()
         turned = blind and bool(self.trusted_q) and \
@@ -141,8 +116,8 @@ class LinkSupervisor:
         if not (lost or scan.active):
             if not blind:  # only angles the beam confirmed: a spun gimbal's are not
                 self.trusted_q.append(q)
-            if np.isfinite(y).all():
-                self._lit = (float(xhat[0]), q)
+            if self.carry is not None and np.isfinite(y).all():
+                self.carry.lit = (float(xhat[0]), q)
             self.gain.update(y, self.monitor.noise_std * self.gain.ratio)
             # A bank picks the member trained for the noise the rescaled powers now
             # carry, a gain-scheduled KKL its floor by it.
