@@ -158,7 +158,6 @@ class AidedINS:
         self.displacement = np.zeros(3)
         self._history: deque[np.ndarray] = deque(maxlen=history)
         self.rejected_fixes = 0  # fixes the outlier gate refused
-        self.last_nis: float | None = None  # the last fix's normalised innovation
 
     # -- propagation -----------------------------------------------------------------------
 
@@ -267,7 +266,6 @@ class AidedINS:
         H = np.zeros((3, N_ERROR))
         H[:, P] = np.eye(3)
         nis = self._correct(np.asarray(fix, dtype=float) - then, H, np.eye(3) * std**2, gate)
-        self.last_nis = nis
         taken = gate is None or nis <= gate
         self.rejected_fixes += not taken
         return taken

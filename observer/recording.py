@@ -114,17 +114,17 @@ def replay_calls(estimator: Estimator, arrays: dict[str, np.ndarray]) -> float:
         elif name == "reset":
             estimator.reset(a if n else None)
         elif name == "update":
-            worst = max(worst, _difference(estimator.update(a), out))
+            worst = max(worst, difference(estimator.update(a), out))
         elif name == "predict":
             estimator.predict(float(a[0]))
         else:
             x = estimator.adapt_noise(float(a[0]), a[1:] if n > 1 else None)
             if x is not None:
-                worst = max(worst, _difference(x, out))
+                worst = max(worst, difference(x, out))
     return worst
 
 
-def _difference(x, out) -> float:
+def difference(x, out) -> float:
     """Largest |x - out|; NaN in both is equal, NaN in one is infinitely far."""
     x = np.asarray(x, dtype=float)
     both = np.isnan(x) & np.isnan(out)

@@ -103,8 +103,7 @@ def outcome(res, xhat: np.ndarray, flags: np.ndarray, cfg: RunConfig, constants,
                           warmup=cfg.scenario_spec.warmup)
     nav = navigation
     if nav is not None and len(res.t):
-        metrics.hull_error_rms = horizontal_rms(nav.hull, np.broadcast_to(nav.station,
-                                                                          nav.hull.shape))
+        metrics.hull_error_rms = horizontal_rms(nav.hull, nav.station)
         metrics.navigation_error_rms = horizontal_rms(nav.navigated, nav.hull)
     windows = None if window is None else window_metrics(
         res.power_clean[:, 0], best, noise, constants.Te, window,

@@ -13,14 +13,13 @@ differences are the export's.
 from __future__ import annotations
 
 import json
-import math
 from dataclasses import dataclass, fields
 from pathlib import Path
 
 import numpy as np
 
 from observer.kkl import KKLObserver
-from observer.recording import CALLS, replay_calls
+from observer.recording import CALLS, difference, replay_calls
 
 from ..errors import LedsimError
 from ..results import DictAccess
@@ -95,14 +94,13 @@ def replay(path: str | Path, onnx: str | Path | None = None) -> ReplayResult:
     arrays = load_trace(path)
     cfg = trace_config(arrays)
     est = run_estimator(cfg)
-    updates = int(np.sum(arrays["call_kind"] == CALLS.index("update")))
-    if onnx is None:
-        worst, against = replay_calls(est, arrays), "numpy"
+    if onnx is None:  # an estimate per update; the exported step gives one per predict
+        worst, against, counted = replay_calls(est, arrays), "numpy", "update"
     else:
-        worst, against = replay_onnx(est, arrays, onnx), "onnx"
-        updates = int(np.sum(arrays["call_kind"] == CALLS.index("predict")))
+        worst, against, counted = replay_onnx(est, arrays, onnx), "onnx", "predict"
+    estimates = int(np.sum(arrays["call_kind"] == CALLS.index(counted)))
     return ReplayResult(str(path), cfg.estimator, against, int(len(arrays["call_kind"])),
-                        updates, worst)
+                        estimates, worst)
 
 
 def replay_onnx(est, arrays: dict[str, np.ndarray], onnx: str | Path) -> float:
@@ -139,6 +137,5 @@ def replay_onnx(est, arrays: dict[str, np.ndarray], onnx: str | Path) -> float:
             y, out = args[:n], rec
         elif name == "predict":
             x, z = sess.run(None, {"z": z, "y": y, "u": args[:1]})
-            d = np.abs(x - out)
-            worst = max(worst, float(np.max(d)) if np.isfinite(d).all() else math.inf)
+            worst = max(worst, difference(x, out))
     return worst

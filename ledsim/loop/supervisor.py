@@ -82,8 +82,6 @@ class LinkSupervisor:
         self.trusted_q: deque = deque(maxlen=max(1, int(round(0.3 / constants.Te))))
         self.carry = EncoderCarry(constants.Te, DEAD_RECKON_AFTER) if dead_reckon else None
 
-        self.sensor_noise = noise_ratio * gain_ratio  # in the model's nominal noise
-        estimator.adapt_noise(noise_ratio)
     @property
     def gain_ratio(self) -> float:
         """The link's gain over the model's that the powers are divided by [-]."""

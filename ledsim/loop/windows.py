@@ -42,9 +42,9 @@ class WindowMetrics(DictAccess):
 
 
 def horizontal_rms(a: np.ndarray, b: np.ndarray) -> float:
-    """RMS of the horizontal distance between the rows of ``a`` and ``b`` (N, >= 2)
-    [m]."""
-    d = np.asarray(a)[:, :2] - np.asarray(b)[:, :2]
+    """RMS of the horizontal distance between the rows of ``a`` (N, >= 2) and those of
+    ``b`` (N, >= 2), or the one point ``b`` (>= 2,) [m]."""
+    d = np.asarray(a)[:, :2] - np.asarray(b)[..., :2]
     return float(np.sqrt(np.mean(np.sum(d * d, axis=1)))) if len(d) else float("nan")
 
 
@@ -62,6 +62,7 @@ def window_metrics(p1: np.ndarray, power_max: np.ndarray, noise_std: float, Te: 
     n = len(p1)
     size = max(1, int(round(window / Te)))
     available, _ = availability_mask(p1, power_max, noise_std)
+    vehicle = hull is not None and station is not None
     out = []
     for a in range(0, n, size):
         b = min(n, a + size)
@@ -70,12 +71,10 @@ def window_metrics(p1: np.ndarray, power_max: np.ndarray, noise_std: float, Te: 
         if b < n and n - b < size // 2:
             b = n
         budget = link_budget(p1[a:b], noise_std, Te)
-        vehicle = hull is not None and station is not None
         out.append(WindowMetrics(
             a * Te, b * Te, float(np.mean(available[a:b])), budget.fec_share,
             float(np.mean(p1[a:b])),
-            horizontal_rms(hull[a:b], np.broadcast_to(station, hull[a:b].shape))
-            if vehicle else None,
+            horizontal_rms(hull[a:b], station) if vehicle else None,
             horizontal_rms(navigated[a:b], hull[a:b])
             if vehicle and navigated is not None else None))
     return out

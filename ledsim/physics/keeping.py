@@ -105,6 +105,9 @@ class StationKeeper:
         self.thrust = np.zeros(5)
         self._omega = np.zeros(3)
         self.k = 0
+        g = gains
+        self._kp = np.array([g.kp, g.kp, g.kp, g.kp_pitch, g.kp_yaw])
+        self._kd = np.array([g.kd, g.kd, g.kd, g.kd_pitch, g.kd_yaw])
 
     def act(self, nav: InsState, covariance: np.ndarray, velocity: np.ndarray,
             omega: np.ndarray, a: np.ndarray) -> np.ndarray:
@@ -144,6 +147,4 @@ class StationKeeper:
         k = g.velocity_deadband
         rate[:2] *= soft_deadband(v[0]**2 + v[1]**2, 0.5 * float(P[3, 3] + P[4, 4]), k)
         rate[2] *= soft_deadband(v[2]**2, float(P[5, 5]), k)
-        kp = np.array([g.kp, g.kp, g.kp, g.kp_pitch, g.kp_yaw])
-        kd = np.array([g.kd, g.kd, g.kd, g.kd_pitch, g.kd_yaw])
-        return -kp * err - kd * rate
+        return -self._kp * err - self._kd * rate

@@ -154,11 +154,12 @@ class Vehicle:
         # increment less its bias and gravity's reaction.
         a = r.delta_velocity / self.Te - nav.accel_bias \
             - nav.attitude.T @ GRAVITY_REACTION
-        v_g = self.velocity + _cross(omega, self.l_gimbal)
+        velocity = self.velocity
+        v_g = velocity + _cross(omega, self.l_gimbal)
         nav_bearing = self._led_in_hull(nav)[0] - self._bearing0
         self.sight.update(v_g, r.encoder, float(omega[2]), nav_bearing)
         if self.keeper is not None:
-            self.keeper.act(nav, self.ins.P, self.velocity, omega, a)
+            self.keeper.act(nav, self.ins.P, velocity, omega, a)
         return self.los
 
     @property
