@@ -11,8 +11,14 @@ from __future__ import annotations
 
 import math
 from dataclasses import asdict, dataclass, field, replace
+from typing import TYPE_CHECKING
 
 from .errors import LedsimError
+
+if TYPE_CHECKING:  # imported where used: the CLI starts before numpy (thread pinning)
+    from observer.noise import MeasurementNoise
+
+    from .layout import ReceiverLayout
 
 #: The paper's link distance d0 [m]: the default everywhere, and the distance of the
 #: shipped MuJoCo bank that serves every other.
@@ -111,6 +117,20 @@ class LinkConstants:
     def measurement_noise_std(self) -> float:
         """Standard deviation of the power noise [W]."""
         return math.sqrt(self.measurement_noise_var)
+
+    @property
+    def layout(self) -> ReceiverLayout:
+        """The receiver: the paper's pair of photodiodes, Delta phi apart, on one axis."""
+        from .layout import paper_layout
+
+        return paper_layout(self.dphi)
+
+    def measurement_noise(self, scale: float = 1.0) -> MeasurementNoise:
+        """The photodiodes' power noise at noise scale ``scale`` [-]: the one object
+        the sensor, the estimators, the supervisor, the env and the link budget read."""
+        from observer.noise import MeasurementNoise
+
+        return MeasurementNoise(self.measurement_noise_std, self.layout.n_photodiodes, scale)
 
     def with_(self, **changes) -> LinkConstants:
         """A validated copy with some constants changed."""

@@ -17,30 +17,39 @@ import numpy as np
 from .config import LinkConstants, ReceiverResponse
 
 
+def response_terms(phi, r: ReceiverResponse, exp=np.exp):
+    """(u1, u2, e1, e2) of the paper's g(phi) = e1 + e2 (eq. modified-gaussian2), with
+    u1 = (phi - b1) / c1, u2 = (phi + b2) / c2 and e_i = a_i exp(-u_i^2).
+
+    The one place the formula is written. ``exp`` evaluates it: ``np.exp`` for arrays,
+    ``math.exp`` for one angle in plain floats (the per-step paths, several times
+    faster), ``torch.exp`` for the exported observer's graph. g is e1 + e2 and its
+    derivative dg/dphi = -2 u1 / c1 e1 - 2 u2 / c2 e2 (:func:`response_slope`).
+    """
+    u1, u2 = (phi - r.b1) / r.c1, (phi + r.b2) / r.c2
+    return u1, u2, r.a1 * exp(-(u1 * u1)), r.a2 * exp(-(u2 * u2))
+
+
+def response_slope(u1, u2, e1, e2, r: ReceiverResponse):
+    """dg/dphi [1/rad] from :func:`response_terms`."""
+    return -2 * u1 / r.c1 * e1 - 2 * u2 / r.c2 * e2
+
+
 def receiver_response(phi, r: ReceiverResponse) -> np.ndarray:
     """g(phi): dimensionless photodiode response at incidence angle ``phi`` [rad]."""
-    phi = np.asarray(phi, dtype=float)
-    return (r.a1 * np.exp(-(((phi - r.b1) / r.c1) ** 2))
-            + r.a2 * np.exp(-(((phi + r.b2) / r.c2) ** 2)))
+    _, _, e1, e2 = response_terms(np.asarray(phi, dtype=float), r)
+    return e1 + e2
 
 
 def receiver_response_at(phi: float, r: ReceiverResponse) -> float:
     """g(phi) for one angle [rad], in plain floats (the per-step paths; same formula)."""
-    _, _, e1, e2 = _response_terms(phi, r)
+    _, _, e1, e2 = response_terms(phi, r, math.exp)
     return e1 + e2
-
-
-def _response_terms(phi: float, r: ReceiverResponse) -> tuple[float, float, float, float]:
-    """(u1, u2, e1, e2) of g(phi) = e1 + e2, e_i = a_i exp(-u_i^2), for one angle."""
-    u1, u2 = (phi - r.b1) / r.c1, (phi + r.b2) / r.c2
-    return u1, u2, r.a1 * math.exp(-u1 * u1), r.a2 * math.exp(-u2 * u2)
 
 
 def receiver_response_derivative(phi, r: ReceiverResponse) -> np.ndarray:
     """dg/dphi [1/rad]."""
-    phi = np.asarray(phi, dtype=float)
-    e1 = r.a1 * np.exp(-(((phi - r.b1) / r.c1) ** 2))
-    e2 = r.a2 * np.exp(-(((phi + r.b2) / r.c2) ** 2))
+    u1, u2, e1, e2 = response_terms(np.asarray(phi, dtype=float), r)
     return -2 * (phi - r.b1) / r.c1**2 * e1 - 2 * (phi + r.b2) / r.c2**2 * e2
 
 
@@ -79,23 +88,29 @@ def photodiode_power(d, theta, incidence_angle, c: LinkConstants, visible=1.0) -
     return received_power(transmitter_gain(d, theta, c), incidence_angle, c.receiver, visible)
 
 
-def pair_power(gain, phi, c: LinkConstants) -> np.ndarray:
-    """Outputs of the two photodiodes, eq. (eq-4a): gain x [g(phi), g(phi + dphi)] [W].
+def layout_power(gain, phi, c: LinkConstants) -> np.ndarray:
+    """Outputs of the receiver's photodiodes (``c.layout``), eq. (eq-4a) for the paper's
+    pair: gain x [g(phi + offset_i)] [W], i over the photodiodes.
 
-    ``phi`` [rad] has any shape; the result has one more axis of length 2.
+    ``phi`` [rad] has any shape; the result has one more axis, one entry a photodiode.
     """
     phi = np.asarray(phi, dtype=float)
-    return np.stack([received_power(gain, phi, c.receiver),
-                     received_power(gain, phi + c.dphi, c.receiver)], axis=-1)
+    return np.stack([received_power(gain, phi + offset, c.receiver)
+                     for offset in c.layout.offsets], axis=-1)
 
 
-def pair_power_jacobian(gain, phi, c: LinkConstants) -> np.ndarray:
-    """d(pair_power)/d(phi, phidot), shape ``phi.shape + (2, 2)`` [W/rad, W s/rad]."""
+def layout_power_jacobian(gain, phi, c: LinkConstants) -> np.ndarray:
+    """d(layout_power)/d(phi, phidot), shape ``phi.shape + (n_pd, 2)`` [W/rad, W s/rad]."""
     phi = np.asarray(phi, dtype=float)
-    jac = np.zeros(np.shape(phi) + (2, 2))
-    jac[..., 0, 0] = gain * receiver_response_derivative(phi, c.receiver)
-    jac[..., 1, 0] = gain * receiver_response_derivative(phi + c.dphi, c.receiver)
+    offsets = c.layout.offsets
+    jac = np.zeros(np.shape(phi) + (len(offsets), 2))
+    for i, offset in enumerate(offsets):
+        jac[..., i, 0] = gain * receiver_response_derivative(phi + offset, c.receiver)
     return jac
+
+
+#: Their earlier names (the paper's pair, eq. eq-4a), kept as aliases.
+pair_power, pair_power_jacobian = layout_power, layout_power_jacobian
 
 
 def peak_power(c: LinkConstants) -> float:
@@ -157,8 +172,8 @@ def pair_shape_inverse(powers, c: LinkConstants) -> tuple[float, float, float]:
 
 def _response_and_slope(phi: float, r: ReceiverResponse) -> tuple[float, float]:
     """(g(phi), dg/dphi) for one angle, in plain floats (the per-step paths)."""
-    u1, u2, e1, e2 = _response_terms(phi, r)
-    return e1 + e2, -2 * u1 / r.c1 * e1 - 2 * u2 / r.c2 * e2
+    terms = response_terms(phi, r, math.exp)
+    return terms[2] + terms[3], response_slope(*terms, r)
 
 
 @functools.lru_cache(maxsize=8)
@@ -174,5 +189,6 @@ def step_form(coef_phi, coef_rate, gain: float, c: LinkConstants, output_low, ou
     r = c.receiver
     return StepForm(tuple(float(v) for v in coef_phi), tuple(float(v) for v in coef_rate),
                     float(gain), (r.a1, r.b1, r.c1, r.a2, r.b2, r.c2), float(c.dphi),
-                    tuple(float(v) for v in output_low), tuple(float(v) for v in output_high))
+                    tuple(float(v) for v in output_low), tuple(float(v) for v in output_high),
+                    tuple(float(o) for o in c.layout.offsets))
 

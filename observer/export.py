@@ -39,13 +39,17 @@ class StepForm:
 
     f:  phi'    = phi + a1 r + a2 u + a3 |r| r
         r'      = b1 r + b2 u + b3 |r| r          (r = phidot)
-    h:  gain [g(phi), g(phi + dphi)],  g(phi) = c1 exp(-((phi - m1)/w1)^2)
-                                               + c2 exp(-((phi + m2)/w2)^2)
+    h:  gain [g(phi + o_i)] over the receiver's photodiodes (offsets o_i; the paper's
+        pair: 0 and dphi),  g(phi) = c1 exp(-((phi - m1)/w1)^2) + c2 exp(-((phi + m2)/w2)^2)
+        (ledsim.optics.response_terms, the same formula; tests/test_export.py checks the
+        graph against the numpy observer)
 
     Attributes:
         coef_phi: (a1 [s], a2 [s^2], a3 [s]); coef_rate: (b1 [-], b2 [s], b3 [s/rad]).
         gain: [W]; response: (c1, m1 [rad], w1 [rad], c2, m2 [rad], w2 [rad]); dphi [rad].
         output_low, output_high: the usable range of each output [W].
+        offsets: each photodiode's incidence angle less the state's phi [rad] (None: the
+            paper's pair, (0, dphi)).
     """
 
     coef_phi: tuple[float, float, float]
@@ -55,6 +59,11 @@ class StepForm:
     dphi: float
     output_low: tuple[float, ...]
     output_high: tuple[float, ...]
+    offsets: tuple[float, ...] | None = None
+
+    @property
+    def photodiode_offsets(self) -> tuple[float, ...]:
+        return (0.0, self.dphi) if self.offsets is None else tuple(self.offsets)
 
 
 class _Graph:
@@ -114,10 +123,11 @@ def _f(g: _Graph, form: StepForm, x: str, u: str) -> str:
 
 
 def _h(g: _Graph, form: StepForm, x: str) -> str:
-    """h(x) of :class:`StepForm`, (2,)."""
+    """h(x) of :class:`StepForm`, (n_pd,)."""
     c1, m1, w1, c2, m2, w2 = form.response
     phi = g.component(x, 0)
-    pair = g.op("Concat", phi, g.op("Add", phi, g.const([form.dphi])), axis=0)
+    pair = g.op("Concat", *(phi if o == 0.0 else g.op("Add", phi, g.const([o]))
+                            for o in form.photodiode_offsets), axis=0)
 
     def gauss(c, shift, width):
         q = g.op("Div", g.op("Add", pair, g.const([shift])), g.const([width]))
@@ -137,6 +147,9 @@ def kkl_step_graph(obs: KKLObserver, form: StepForm, name: str = "kkl_step"):
     g = _Graph()
     h = g.helper
     q, p, n = obs.q, obs.system.n_output, obs.system.n_state
+    if len(form.photodiode_offsets) != p:
+        raise ObserverError(f"the step form has {len(form.photodiode_offsets)} photodiodes "
+                            f"and the observer {p} outputs: they must match")
     x_hat = g.mlp(obs.decoder_T_star, "z", "decoder_T_star")
     x_hat = g.op("Identity", x_hat, stem="x_hat_value")
     # Missing samples (non-finite or outside the usable range) are held at h(x_hat).

@@ -18,6 +18,8 @@ from abc import ABC, abstractmethod
 
 import numpy as np
 
+from .noise import MeasurementNoise
+
 
 class DiscreteSystem(ABC):
     """Abstract discrete-time system ``x' = f(x, u)``, ``y = h(x)``.
@@ -32,6 +34,8 @@ class DiscreteSystem(ABC):
         domain_low, domain_high: corners of the training box, shape ``(n_state,)``.
         process_noise_std: standard deviation of w_k per step, shape ``(n_state,)``.
         measurement_noise_std: standard deviation of v_k, shape ``(n_output,)``.
+        measurement_noise: the :class:`~observer.noise.MeasurementNoise` v_k is drawn
+            from (None: only ``measurement_noise_std`` is known).
         state_names, output_names: labels (with units) for tables and plots.
     """
 
@@ -43,6 +47,7 @@ class DiscreteSystem(ABC):
     domain_high: np.ndarray
     process_noise_std: np.ndarray
     measurement_noise_std: np.ndarray
+    measurement_noise: MeasurementNoise | None = None
     state_names: tuple[str, ...] = ()
     output_names: tuple[str, ...] = ()
     #: Physically possible measurements, shape ``(n_output,)`` each (None: any finite

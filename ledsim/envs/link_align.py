@@ -59,6 +59,7 @@ from ..config import LinkConstants
 from ..control import receiver_peak
 from ..loop.closed_loop import start_world
 from ..loop.config import EstimatorPart, RunConfig, TaskPart, WorldPart
+from ..loop.estimation import run_noise
 from ..optics import IMPOSSIBLE_SIGMAS, achievable_power, peak_power
 from ..physics.sensor import SensorReading
 from ..physics.system import GimbalSystem
@@ -141,7 +142,8 @@ class LinkAlignEnv(gym.Env, EzPickle):
         c = self.system.constants
         self.peak = peak_power(c)
         self.peak_response = receiver_peak(c)
-        margin = IMPOSSIBLE_SIGMAS * c.measurement_noise_std * self.cfg.noise_scale
+        self.measurement_noise = run_noise(self.cfg, self.system)
+        margin = IMPOSSIBLE_SIGMAS * self.measurement_noise.std
         closest = float(achievable_power(MIN_DISTANCE, 0.0, c, self.peak_response))
         self.render_mode = render_mode
         self.metadata = {**self.metadata, "render_fps": int(round(1.0 / self.dt))}
@@ -178,9 +180,11 @@ class LinkAlignEnv(gym.Env, EzPickle):
         """Photodiode 1's noise-free power over the most the current geometry allows
         (the reward) [-]; round-off above 1 is cut."""
         r = self.reading
-        best = float(achievable_power(r.distance[0], r.emission_angle[0],
+        lay = self.system.constants.layout
+        best = float(achievable_power(lay.reference_power(r.distance),
+                                      lay.reference_power(r.emission_angle),
                                       self.system.constants, self.peak_response))
-        return min(1.0, float(r.power_clean[0]) / best) if best > 0 else 0.0
+        return min(1.0, float(lay.reference_power(r.power_clean)) / best) if best > 0 else 0.0
 
     def reset(self, *, seed: int | None = None, options: dict | None = None):
         super().reset(seed=seed)
@@ -192,7 +196,7 @@ class LinkAlignEnv(gym.Env, EzPickle):
         else:
             self.run_seed = int(seed)
         self.sensor, self.disturbances, self.vehicle = start_world(
-            self.cfg, self.system, self.world, self.run_seed, x0)
+            self.cfg, self.system, self.world, self.run_seed, x0, self.measurement_noise)
         self.start_gimbal_angle = self.world.gimbal_angle
         self.k = 0
         self.episode += 1
@@ -223,7 +227,7 @@ class LinkAlignEnv(gym.Env, EzPickle):
             self._recorder = FrameRecorder(self.world, w, h, self.metadata["render_fps"], cam,
                                            label="LinkAlign-v0", estimate=False)
         r = self.reading
-        self._recorder.overlay.push(r.phi, np.nan, r.power[0], r.power[1])
+        self._recorder.overlay.push(r.phi, np.nan, *r.power)
         return self._recorder.render(self.k * self.dt, r)
 
     def close(self):

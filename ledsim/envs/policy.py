@@ -54,7 +54,8 @@ class ShippedAlignmentPolicy:
         env = self.env
         model = identified_model_of(env.system.config)
         self.step = control_step(self.cfg, env.system, model, env.run_seed,
-                                 env.start_gimbal_angle, lambda: env.reading.x)
+                                 env.start_gimbal_angle, lambda: env.reading.x,
+                                 noise=env.measurement_noise)
         self._episode = env.episode
 
     @property
@@ -113,7 +114,8 @@ class EstimatorObservation(gym.ObservationWrapper, gym.utils.RecordConstructorAr
         model = identified_model_of(base.system.config)
         self.motor = GimbalMotor(base.system.inertia)
         self.supervisor = run_supervisor(self.cfg, base.system, model, base.run_seed,
-                                         lambda: base.reading.x, reacquire=False)
+                                         lambda: base.reading.x, reacquire=False,
+                                         noise=base.measurement_noise)
         self.gate = dropout_gate(base.system.constants, self.supervisor)
         return self.observation(obs), info
 

@@ -17,21 +17,20 @@ import sys
 import time
 from collections.abc import Callable, Sequence
 from concurrent.futures import ThreadPoolExecutor
-from typing import NamedTuple
 
 import numpy as np
 from tqdm.auto import tqdm
 
+from observer.noise import MeasurementNoise
 from observer.oracle import Oracle
 from observer.recording import RecordingEstimator
 
 from ..optics import peak_power
 from ..physics.disturbances import parse_disturbance
-from ..physics.sensor import IrradianceSensor, SensorReading
+from ..physics.sensor import SensorReading
 from ..physics.simulation import SimulationResult
 from ..physics.system import GimbalSystem
-from ..physics.tick import advance, prepare
-from ..physics.vehicle import Vehicle
+from ..physics.tick import advance
 from ..physics.world import LinkWorld
 from ..step import ControlStep, GimbalMotor, Unsupervised
 from .config import RunConfig
@@ -40,84 +39,61 @@ from .estimation import (  # noqa: F401 (re-exported)
     identified_model,
     loop_checkpoint,
     loop_estimator,
+    run_noise,
 )
 from .gate import DropoutGate
 from .given import GivenRecord
 from .outcome import Navigation, RunOutcome, Trace, achievable_power, outcome  # noqa: F401
+from .start import Surroundings, start_world  # noqa: F401 (re-exported)
 from .supervisor import LinkSupervisor
 
 
-class Surroundings(NamedTuple):
-    """What a run's world is given at its start: the photodiodes' sensor, the
-    disturbances and the vehicle (None: a scene without the vehicle's sensors, run with
-    ``--no-imu``)."""
-
-    sensor: IrradianceSensor
-    disturbances: list
-    vehicle: Vehicle | None
-
-
-def start_world(cfg: RunConfig, system: GimbalSystem, world: LinkWorld, seed: int,
-                x0: tuple[float, float] | None = None) -> Surroundings:
-    """Put ``world`` in the scenario's initial state (or the true state ``x0``: phi
-    [rad], phidot [rad/s]), ready for step 0, and give it the run's sensor,
-    disturbances and vehicle, all seeded with ``seed``."""
-    x0 = cfg.scenario_spec.x0 if x0 is None else x0
-    world.reset(gimbal_angle=system.phi_home - x0[0], gimbal_rate=0.0 - x0[1])
-    sensor = IrradianceSensor(world, seed=seed, noise_scale=cfg.noise_scale)
-    disturbances = [parse_disturbance(d) for d in cfg.disturbances]
-    for d in disturbances:
-        d.reset(seed)
-    vehicle = None
-    if cfg.imu or world.ids.vehicle_sensors is not None:
-        vehicle = Vehicle(world, system.Te, seed, cfg.distance, cfg.station_keeps,
-                          noise=cfg.world.navigation_noise(),
-                          gains=cfg.world.keeping_gains())
-    prepare(world, disturbances, world.time, vehicle)
-    return Surroundings(sensor, disturbances, vehicle)
-
-
 def make_supervisor(cfg: RunConfig, system: GimbalSystem, estimator, estimator_system,
-                    reacquire: bool) -> LinkSupervisor:
-    """The supervisor of one run: its gain prior is the configured distance's over the
-    estimator model's, and its noise prior the noise in the model's gain over the noise
-    that model already carries (for a bank: its nominal noise)."""
+                    reacquire: bool, noise: MeasurementNoise) -> LinkSupervisor:
+    """The supervisor of one run with measurement noise ``noise``: its gain prior is
+    the configured distance's over the estimator model's, and its noise prior the noise
+    in the model's gain over the noise that model already carries (for a bank: its
+    nominal noise)."""
     prior = peak_power(system.constants) / peak_power(estimator_system.constants)
     carried = (estimator_system.constants.measurement_noise_std
                / system.constants.measurement_noise_std)
     return LinkSupervisor(estimator, system.constants, system.inertia,
                           warmup=cfg.scenario_spec.warmup, reacquire=reacquire,
-                          gain_ratio=prior, noise_ratio=cfg.noise_scale / prior / carried,
+                          gain_ratio=prior, noise_ratio=noise.scale / prior / carried,
                           dead_reckon=cfg.imu)
 
 
 def run_supervisor(cfg: RunConfig, system: GimbalSystem, model, seed: int,
-                   truth: Callable[[], np.ndarray], reacquire: bool, record: bool = False):
+                   truth: Callable[[], np.ndarray], reacquire: bool, record: bool = False,
+                   noise: MeasurementNoise | None = None):
     """The estimator of seed ``seed`` of ``cfg`` under its supervisor (the oracle, which
     reads ``truth``, and runs without supervision are :class:`Unsupervised`);
     ``reacquire``: the supervisor may scan for a lost beam; ``record``: the estimator
-    keeps every call it is given (:class:`~observer.recording.RecordingEstimator`)."""
+    keeps every call it is given (:class:`~observer.recording.RecordingEstimator`);
+    ``noise``: the run's measurement noise (None: :func:`run_noise`)."""
     if cfg.estimator == "oracle":
         return Unsupervised(Oracle(system, truth))
-    est, est_system = loop_estimator(cfg, system, model)
+    noise = run_noise(cfg, system) if noise is None else noise
+    est, est_system = loop_estimator(cfg, system, model, noise)
     if record:
         est = RecordingEstimator(est)
     est.seed_run(seed)
     est.reset()
     if not cfg.supervision:
         return Unsupervised(est)
-    return make_supervisor(cfg, system, est, est_system, reacquire)
+    return make_supervisor(cfg, system, est, est_system, reacquire, noise)
 
 
 def control_step(cfg: RunConfig, system: GimbalSystem, model, seed: int, q_hold: float,
-                 truth: Callable[[], np.ndarray], record: bool = False) -> ControlStep:
+                 truth: Callable[[], np.ndarray], record: bool = False,
+                 noise: MeasurementNoise | None = None) -> ControlStep:
     """The control step of seed ``seed`` of ``cfg`` (``ledsim run``'s stack): dropout
     gate, the estimator under its supervisor (the oracle reads ``truth``), the
     scenario's law, and the gimbal motor holding ``q_hold`` [rad] during the warm-up;
     ``record``: the estimator keeps what it is given."""
     spec = cfg.scenario_spec
     supervisor = run_supervisor(cfg, system, model, seed, truth, spec.law.tracks_beam,
-                                record)
+                                record, noise)
     motor = GimbalMotor(system.inertia, q_hold, limit=system.config.torque_limit)
     return ControlStep(dropout_gate(system.constants, supervisor), supervisor, spec.law,
                        system.constants, motor, spec.warmup, model=model)
@@ -140,21 +116,25 @@ class LoopRun:
                  world: LinkWorld, steps: int, record: bool = False):
         self.seed = seed
         self.world = world
-        self.sensor, self.disturbances, self.vehicle = start_world(cfg, system, world, seed)
+        self.noise = run_noise(cfg, system)
+        self.sensor, self.disturbances, self.vehicle = start_world(cfg, system, world, seed,
+                                                                   noise=self.noise)
         self.aided = cfg.imu
         self.reading: SensorReading | None = None
         self.step = control_step(cfg, system, model, seed, world.gimbal_angle,
-                                 lambda: self.reading.x, record)
+                                 lambda: self.reading.x, record, self.noise)
         self.given = GivenRecord(steps) if record else None
         self.supervised = isinstance(self.step.supervisor, LinkSupervisor)
-        self.geo = np.empty((steps, 4, 2))  # distance, theta, phi, visible fraction
-        self.state = np.empty((steps, 2))
-        self.gimbal = np.empty((steps, 2))
+        lay = system.constants.layout
+        npd, nx = lay.n_photodiodes, lay.n_state
+        self.geo = np.empty((steps, 4, npd))  # distance, theta, phi, visible fraction
+        self.state = np.empty((steps, nx))
+        self.gimbal = np.empty((steps, nx))
         self.hull = np.empty((steps, 3))
-        self.power = np.empty((steps, 2))
-        self.clean = np.empty((steps, 2))
+        self.power = np.empty((steps, npd))
+        self.clean = np.empty((steps, npd))
         self.applied = np.empty(steps)
-        self.xhat = np.empty((steps, 2))
+        self.xhat = np.empty((steps, nx))
         self.flags = np.zeros((steps, 2), dtype=bool)  # lost, acquiring
         # The vehicle's navigated position [m] and its station (None: no vehicle).
         self.navigated = np.full((steps, 3), np.nan)
@@ -269,7 +249,7 @@ class ClosedLoop:
                         Navigation(run.hull, run.station, run.navigated), window,
                         run.vehicle is not None and run.vehicle.station_keeping,
                         None if run.given is None else
-                        run.given.series(run.step.estimator, self.cfg))
+                        run.given.series(run.step.estimator, self.cfg), run.noise)
                 for i, run in enumerate(runs)]
 
 

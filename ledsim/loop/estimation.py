@@ -18,6 +18,7 @@ from pathlib import Path
 
 from observer import checkpoint as ckpt
 from observer.bank import ObserverBank
+from observer.noise import MeasurementNoise
 
 from ..config import PAPER_DISTANCE
 from ..estimators import build_estimator
@@ -146,9 +147,17 @@ def check_checkpoint(cfg: RunConfig) -> None:
             ckpt.load(m.checkpoint, GimbalSystem(m.world))
 
 
-def loop_estimator(cfg: RunConfig, system: GimbalSystem, model: IdentifiedGimbalModel):
-    """(estimator, the system whose gain its model has) for a run in ``system``'s world;
-    the estimator is None for the oracle."""
+def run_noise(cfg: RunConfig, system: GimbalSystem) -> MeasurementNoise:
+    """The measurement noise of a run of ``cfg`` in ``system``'s world: the link's at
+    the run's noise scale."""
+    return system.measurement_noise.scaled(cfg.noise_scale)
+
+
+def loop_estimator(cfg: RunConfig, system: GimbalSystem, model: IdentifiedGimbalModel,
+                   noise: MeasurementNoise | None = None):
+    """(estimator, the system whose gain its model has) for a run in ``system``'s world
+    with the measurement noise ``noise`` (None: :func:`run_noise`); the estimator is
+    None for the oracle."""
     if cfg.estimator not in KKL_ESTIMATORS:
         if cfg.filter_distance == "nominal":
             # What the KKL knows: the reference distance's model, and the supervisor's
@@ -156,7 +165,8 @@ def loop_estimator(cfg: RunConfig, system: GimbalSystem, model: IdentifiedGimbal
             # by the distance's prior (as the KKL bank picks its member).
             ref = cfg.world_config(distance=REFERENCE_DISTANCE)
             prior = peak_power(system.constants) / peak_power(ref.constants)
-            system = member_system(noisier(ref, cfg.noise_scale / prior))
+            noise = run_noise(cfg, system) if noise is None else noise
+            system = member_system(noisier(ref, noise.scale / prior))
             model = identified_model(system)
         # Under supervision a loss is the supervisor's to handle, for every estimator
         # alike: the particle filter's own re-draw fired on half-occluded samples and kicks.

@@ -41,7 +41,8 @@ class GivenRecord:
         """The trace's series of what was given: the per-step ones, the estimator's
         calls (when it recorded them: not the oracle's) and ``config``, the run's
         configuration as JSON."""
-        out = {"withheld_p1": self.withheld[:, 0], "withheld_p2": self.withheld[:, 1],
+        out = {**cfg.world_config().constants.layout.power_columns(self.withheld,
+                                                                    prefix="withheld_"),
                "u": self.u, "u_hull": self.u_hull, "reseeded": self.reseeded,
                "gain": self.gain, "config": np.array(json.dumps(asdict(cfg)))}
         if isinstance(estimator, RecordingEstimator):

@@ -144,8 +144,9 @@ def run_metrics(x: np.ndarray, xhat: np.ndarray, power_clean: np.ndarray, steady
     Te = constants.Te
     e = rmse(xhat, x)
     es = rmse(xhat, x, int(round(steady_from / Te)))
-    aligned = np.abs(x[:, 0] - intensity_maximum(constants)) < ALIGN_TOLERANCE
-    p1 = power_clean[:, 0]
+    lay = constants.layout
+    aligned = np.abs(lay.angle(x) - intensity_maximum(constants)) < ALIGN_TOLERANCE
+    p1 = lay.reference_power(power_clean)
     best = np.full(len(p1), peak_power(constants)) if power_max is None else power_max
     available, possible = availability_mask(p1, best, noise_std)
     recovery = None
@@ -161,7 +162,7 @@ def run_metrics(x: np.ndarray, xhat: np.ndarray, power_clean: np.ndarray, steady
         delay = max(after[0] - event_start, 0.0) if after else None
     budget = {} if noise_std is None else asdict(link_budget(p1, noise_std, Te))
     flagged = np.zeros(len(x), bool) if lost is None else np.asarray(lost, dtype=bool)
-    wrong = (np.abs(xhat[:, 0] - x[:, 0]) > SILENT_ERROR) & ~flagged
+    wrong = (np.abs(lay.angle(xhat) - lay.angle(x)) > SILENT_ERROR) & ~flagged
     after = np.arange(len(x)) * Te >= warmup
     silent = float(np.mean(wrong[after])) if after.any() else 0.0
     return RunMetrics(

@@ -8,7 +8,9 @@ from typing import NamedTuple
 import numpy as np
 
 from .. import optics
+from ..config import LinkConstants
 from ..control import receiver_peak
+from ..layout import ReceiverLayout
 from ..results import DictAccess
 from .config import RunConfig
 from .metrics import RunMetrics, run_metrics
@@ -21,10 +23,11 @@ class Trace(DictAccess):
 
     Attributes:
         t [s]; x, xhat: true and estimated (phi [rad], phidot [rad/s]); power,
-        power_clean (N, 2) [W]; torque [N m]; occluded (N, 2): any aperture ray blocked;
-        lost (N,): the supervisor did not trust the estimate; acquiring (N,): its
-        acquisition scan had the motor; given: what the estimator was given (None: not
-        kept; :mod:`ledsim.loop.given`), series by name.
+        power_clean (N, n_pd) [W]; torque [N m]; occluded (N, n_pd): any aperture ray
+        blocked; lost (N,): the supervisor did not trust the estimate; acquiring (N,):
+        its acquisition scan had the motor; given: what the estimator was given (None:
+        not kept; :mod:`ledsim.loop.given`), series by name; layout: the receiver that
+        names the state's and the powers' series (None: the paper's).
     """
 
     t: np.ndarray
@@ -37,6 +40,7 @@ class Trace(DictAccess):
     lost: np.ndarray | None = None
     acquiring: np.ndarray | None = None
     given: dict | None = None
+    layout: ReceiverLayout | None = None
 
     def series(self) -> dict[str, np.ndarray]:
         """The trace as 1-D arrays in SI units, one row per control step: ``t`` [s],
@@ -45,9 +49,9 @@ class Trace(DictAccess):
         estimator was given (:meth:`ledsim.loop.given.GivenRecord.series`)."""
         n = len(self.t)
         lost = np.zeros(n, dtype=bool) if self.lost is None else np.asarray(self.lost)
-        return {"t": self.t, "phi": self.x[:, 0], "phidot": self.x[:, 1],
-                "phi_hat": self.xhat[:, 0], "phidot_hat": self.xhat[:, 1],
-                "p1": self.power[:, 0], "p2": self.power[:, 1], "torque": self.torque,
+        lay = LinkConstants().layout if self.layout is None else self.layout
+        return {"t": self.t, **lay.state_columns(self.x), **lay.state_columns(self.xhat, "_hat"),
+                **lay.power_columns(self.power), "torque": self.torque,
                 "lost": lost, **(self.given or {})}
 
 
@@ -76,9 +80,12 @@ class Navigation(NamedTuple):
 
 
 def achievable_power(res, c) -> np.ndarray:
-    """Most photodiode 1 could receive at each step of ``res`` [W]: the transmitter gain
-    of that moment's distance and LED angle, times the receiver's peak response."""
-    return optics.achievable_power(res.distance[:, 0], res.emission_angle[:, 0], c,
+    """Most the reference photodiode could receive at each step of ``res`` [W]: the
+    transmitter gain of that moment's distance and LED angle, times the receiver's peak
+    response."""
+    lay = c.layout
+    return optics.achievable_power(lay.reference_power(res.distance),
+                                   lay.reference_power(res.emission_angle), c,
                                    receiver_peak(c))
 
 
@@ -86,15 +93,16 @@ def outcome(res, xhat: np.ndarray, flags: np.ndarray, cfg: RunConfig, constants,
             disturbances, supervised: bool, spent: float, wall: float,
             keep_trace: bool, navigation: Navigation | None = None,
             window: float | None = None, station_keeping: bool | None = None,
-            given: dict | None = None) -> RunOutcome:
+            given: dict | None = None, noise=None) -> RunOutcome:
     """A run's :class:`RunOutcome` from its simulation result, its estimates, its
     (lost, acquiring) flags per step, the seconds spent controlling and in all, its
     vehicle's :class:`Navigation` (None: no vehicle) and the window [s] of per-window
-    metrics (None: none)."""
+    metrics (None: none). ``noise``: the run's measurement noise (None: the link's at
+    the run's noise scale)."""
     events = [d for d in disturbances if d.event_end is not None]
     flags = flags.reshape(-1, 2)
     best = achievable_power(res, constants)
-    noise = constants.measurement_noise_std * cfg.noise_scale
+    noise = (constants.measurement_noise(cfg.noise_scale) if noise is None else noise).std
     metrics = run_metrics(res.x, xhat, res.power_clean, cfg.steady_from,
                           constants, events[0].event_end if events else None,
                           lost=flags[:, 0] if supervised else None,
@@ -106,10 +114,11 @@ def outcome(res, xhat: np.ndarray, flags: np.ndarray, cfg: RunConfig, constants,
         metrics.hull_error_rms = horizontal_rms(nav.hull, nav.station)
         metrics.navigation_error_rms = horizontal_rms(nav.navigated, nav.hull)
     windows = None if window is None else window_metrics(
-        res.power_clean[:, 0], best, noise, constants.Te, window,
+        constants.layout.reference_power(res.power_clean), best, noise, constants.Te, window,
         *(() if nav is None else nav))
     trace = Trace(res.t, res.x, xhat, res.power, res.power_clean, res.torque,
-                  res.occluded, flags[:, 0], flags[:, 1], given) if keep_trace else None
+                  res.occluded, flags[:, 0], flags[:, 1], given,
+                  constants.layout) if keep_trace else None
     return RunOutcome(metrics, 1e6 * spent / len(res.t) if len(res.t) else 0.0,
                       res.t[-1] / wall if len(res.t) else 0.0, trace, windows,
                       station_keeping)

@@ -21,7 +21,7 @@ from observer.occlusion import EncoderCarry
 from observer.supervision import GainTracker, ResidualMonitor
 
 from ..config import LinkConstants
-from ..optics import pair_power, pair_shape_inverse
+from ..optics import layout_power, pair_shape_inverse
 from ..step import Decision
 from .acquisition import AcquisitionScan
 
@@ -31,7 +31,7 @@ def model_gain(model, constants: LinkConstants) -> float:
     (least squares over its domain)."""
     phi = np.linspace(model.domain_low[0], model.domain_high[0], 101)
     h = np.asarray(model.h(np.stack([phi, np.zeros_like(phi)], axis=-1)))
-    g = pair_power(1.0, phi, constants)
+    g = layout_power(1.0, phi, constants)
     return float(np.sum(h * g) / np.sum(g * g))
 
 
@@ -81,6 +81,7 @@ class LinkSupervisor:
         # late, so the scan centres on the oldest, from before the trouble began.
         self.trusted_q: deque = deque(maxlen=max(1, int(round(0.3 / constants.Te))))
         self.carry = EncoderCarry(constants.Te, DEAD_RECKON_AFTER) if dead_reckon else None
+        self._angle = constants.layout.angle
 
     @property
     def gain_ratio(self) -> float:
@@ -115,7 +116,7 @@ class LinkSupervisor:
             if not blind:  # only angles the beam confirmed: a spun gimbal's are not
                 self.trusted_q.append(q)
             if self.carry is not None and np.isfinite(y).all():
-                self.carry.lit = (float(xhat[0]), q)
+                self.carry.lit = (float(self._angle(xhat)), q)
             self.gain.update(y, self.monitor.noise_std * self.gain.ratio)
             # A bank picks the member trained for the noise the rescaled powers now
             # carry, a gain-scheduled KKL its floor by it.

@@ -17,8 +17,8 @@ from observer.system import DiscreteSystem
 
 from ..config import LinkConstants
 from ..optics import (
-    pair_power,
-    pair_power_jacobian,
+    layout_power,
+    layout_power_jacobian,
     plausible_power_range,
     step_form,
     transmitter_gain,
@@ -53,7 +53,8 @@ class LEDLinkModel(DiscreteSystem):
         self.domain_high = np.array(domain, dtype=float)
         self.domain_low = -self.domain_high
         self.process_noise_std = np.array(c.process_noise_std, dtype=float)
-        self.measurement_noise_std = np.full(2, c.measurement_noise_std)
+        self.measurement_noise = c.measurement_noise()
+        self.measurement_noise_std = self.measurement_noise.std_at()
         self.cp_bar = float(transmitter_gain(c.distance, c.theta, c))
         self.output_low, self.output_high = plausible_power_range(c)
         self._F = np.array([[1.0, c.Te], [0.0, 1.0]])
@@ -76,14 +77,14 @@ class LEDLinkModel(DiscreteSystem):
         return np.stack([x[..., 0] - self.Te * x2, x2], axis=-1)
 
     def h(self, x):
-        return pair_power(self.cp_bar, np.asarray(x, dtype=float)[..., 0], self.constants)
+        return layout_power(self.cp_bar, self.constants.layout.angle(x), self.constants)
 
     def f_jacobian(self, x, u=0.0, eps=None):
         return np.broadcast_to(self._F, np.shape(x)[:-1] + (2, 2)).copy()
 
     def h_jacobian(self, x, eps=None):
-        return pair_power_jacobian(self.cp_bar, np.asarray(x, dtype=float)[..., 0],
-                                   self.constants)
+        return layout_power_jacobian(self.cp_bar, self.constants.layout.angle(x),
+                                     self.constants)
 
     def metadata(self) -> dict:
         meta = super().metadata()

@@ -41,6 +41,9 @@ class WorldBatch:
         m = w0.model
         ids = w0.ids
         self._sites = np.array([*ids.photodiode_sites, ids.led_site])
+        #: Photodiodes of the receiver (its layout's order), and the reference one's index.
+        self.n_photodiodes = len(ids.photodiode_sites)
+        self.reference = w0.config.constants.layout.reference
         self._gimbal = ids.gimbal_body
         self._root = int(m.body_rootid[ids.gimbal_body])
         # Geoms that block light (groups 0-2, not the gimbal): planes, and the others
@@ -52,9 +55,10 @@ class WorldBatch:
         self.blocking_geoms = np.flatnonzero(blocking & ~plane)
         self.rbound = m.geom_rbound[self.blocking_geoms].copy()
         self.unbounded = bool(np.any(self.rbound <= 0))
-        self._all_sites = m.nsite == 3 and list(self._sites) == [0, 1, 2]
-        self.site_pos = np.empty((n, 3, 3))  # pd1, pd2, LED
-        self.site_mat = np.empty((n, 3, 9))
+        self._all_sites = m.nsite == len(self._sites) and \
+            list(self._sites) == list(range(m.nsite))
+        self.site_pos = np.empty((n, len(self._sites), 3))  # the photodiodes, the LED
+        self.site_mat = np.empty((n, len(self._sites), 9))
         self.gimbal_mat = np.empty((n, 9))
         self.gimbal_cvel = np.empty((n, 6))
         self.root_com = np.empty((n, 3))
@@ -189,15 +193,30 @@ class WorldBatch:
 
     @property
     def photodiode_normal(self) -> np.ndarray:
-        """Unit normals of both photodiodes, (N, 2, 3)."""
-        return self.site_mat[:, :2, 2::3]
+        """Unit normals of the photodiodes, (N, n_pd, 3)."""
+        return self.site_mat[:, :self.n_photodiodes, 2::3]
+
+    @property
+    def photodiode_pos(self) -> np.ndarray:
+        """Positions of the photodiodes [m], (N, n_pd, 3)."""
+        return self.site_pos[:, :self.n_photodiodes]
+
+    @property
+    def led_pos(self) -> np.ndarray:
+        """Position of the LED [m], (N, 3)."""
+        return self.site_pos[:, self.n_photodiodes]
+
+    @property
+    def led_axis(self) -> np.ndarray:
+        """The LED's axis (its site's z), (N, 3)."""
+        return self.site_mat[:, self.n_photodiodes, 2::3]
 
     def photodiode_velocity0(self) -> tuple[np.ndarray, np.ndarray]:
-        """(angular, linear) velocity of photodiode 1, each (N, 3), as
+        """(angular, linear) velocity of the reference photodiode, each (N, 3), as
         ``mj_objectVelocity`` computes it (the body's com-based velocity moved to the
         site)."""
         ang, lin = self.gimbal_cvel[:, :3], self.gimbal_cvel[:, 3:]
-        return ang, lin - cross3(self.site_pos[:, 0] - self.root_com, ang)
+        return ang, lin - cross3(self.site_pos[:, self.reference] - self.root_com, ang)
 
 
 def dot3(a: np.ndarray, b: np.ndarray) -> np.ndarray:

@@ -26,7 +26,7 @@ class BatchReading(SensorReading):
     of N worlds (``phi``, ``phidot``, ``gimbal_angle``, ``gimbal_rate``: (N,)), and
 
     Attributes:
-        rays: (N, 2) which photodiodes cast rays this step (the others were provably clear).
+        rays: (N, n_pd) which photodiodes cast rays this step (the others were provably clear).
     """
 
     rays: np.ndarray
@@ -41,7 +41,7 @@ def segment_distance(points: np.ndarray, a: np.ndarray, b: np.ndarray) -> np.nda
 
 
 class BatchSensor:
-    """The two-photodiode sensor of every world of a :class:`WorldBatch` in one pass.
+    """The photodiodes' sensor of every world of a :class:`WorldBatch` in one pass.
 
     Args:
         batch: the worlds.
@@ -59,25 +59,26 @@ class BatchSensor:
         self.constants = w0.config.constants
         self.aperture_radius = w0.config.aperture_radius
         self.margin = margin
-        self.noise = np.stack([s.rng.standard_normal((steps, 2)) * s.noise_std
-                               for s in self.sensors], axis=1)  # (steps, N, 2)
+        npd = batch.n_photodiodes
+        self.noise = np.stack([s.rng.standard_normal((steps, npd)) * s.noise_std
+                               for s in self.sensors], axis=1)  # (steps, N, n_pd)
         self.k = 0
 
     def needs_rays(self) -> np.ndarray:
-        """(N, 2): which photodiodes have a light-blocking geom within reach of their
+        """(N, n_pd): which photodiodes have a light-blocking geom within reach of their
         line of sight to the LED aperture: its bounding sphere within the aperture radius
         of the segment photodiode-LED, or a plane that close to either end."""
         b = self.batch
-        n = len(b.worlds)
+        n, npd = len(b.worlds), b.n_photodiodes
         if b.unbounded:
-            return np.ones((n, 2), dtype=bool)
-        out = np.zeros((n, 2), dtype=bool)
-        led = b.site_pos[:, 2]
+            return np.ones((n, npd), dtype=bool)
+        out = np.zeros((n, npd), dtype=bool)
+        led, pds = b.led_pos, b.photodiode_pos
         if b.planes.size:
             normal = b.plane_normal
             led_side = dot3(led[:, None] - b.plane_pos, normal)  # (N, P)
-            for i in range(2):
-                pd_side = dot3(b.site_pos[:, None, i] - b.plane_pos, normal)
+            for i in range(npd):
+                pd_side = dot3(pds[:, None, i] - b.plane_pos, normal)
                 out[:, i] = np.any(np.minimum(pd_side, led_side)
                                    <= self.aperture_radius + self.margin, axis=1)
         if b.blocking_geoms.size == 0:
@@ -86,28 +87,26 @@ class BatchSensor:
         reach = b.rbound + self.aperture_radius + self.margin  # (G,)
         # Coarse pass: both segments lie in the ball around the LED through the farther
         # photodiode; only geoms that reach into it get the exact segment test.
-        radius = np.sqrt(np.max(dot3(b.site_pos[:, :2] - led[:, None], b.site_pos[:, :2]
-                                     - led[:, None]), axis=1))
+        radius = np.sqrt(np.max(dot3(pds - led[:, None], pds - led[:, None]), axis=1))
         gap = centres - led[:, None]
         near = np.sqrt(dot3(gap, gap)) <= radius[:, None] + reach
         worlds, geoms = np.nonzero(near)
         if worlds.size:
-            for i in range(2):
+            for i in range(npd):
                 dist = segment_distance(centres[worlds, geoms][:, None],
-                                        b.site_pos[worlds, i], led[worlds])[:, 0]
+                                        pds[worlds, i], led[worlds])[:, 0]
                 np.logical_or.at(out[:, i], worlds, dist <= reach[geoms])
         return out
 
     def clean(self) -> tuple[np.ndarray, ...]:
         """(clean power [W], phi [rad], theta [rad], distance [m], visible fraction,
-        rays cast), each (N, 2), of every world at the current state, without noise."""
+        rays cast), each (N, n_pd), of every world at the current state, without noise."""
         b, c = self.batch, self.constants
-        led = b.site_pos[:, 2]
-        v = led[:, None, :] - b.site_pos[:, :2]  # (N, 2, 3)
+        v = b.led_pos[:, None, :] - b.photodiode_pos  # (N, n_pd, 3)
         dist = np.sqrt(dot3(v, v))
         u = v / dist[..., None]
         normal = b.photodiode_normal
-        axis = b.site_mat[:, 2, 2::3][:, None, :]
+        axis = b.led_axis[:, None, :]
         hinge = b.hinge_axis[:, None, :]
         phi = np.arctan2(dot3(cross3(normal, u), hinge), dot3(normal, u))
         theta = np.arccos(np.clip(-dot3(axis, u), -1.0, 1.0))
@@ -126,15 +125,16 @@ class BatchSensor:
         clean, phi, theta, dist, vis, rays = self.clean()
         power = clean + self.noise[self.k]
         self.k += 1
-        return BatchReading(power, clean, phi, theta, dist, vis, phi[:, 0].copy(),
+        return BatchReading(power, clean, phi, theta, dist, vis, phi[:, b.reference].copy(),
                             self.incidence_rate0(), b.qpos_hinge.copy(),
                             b.qvel_hinge.copy(), b.hull_pos.copy(), rays)
 
     def incidence_rate0(self) -> np.ndarray:
-        """d(phi_1)/dt of every world [rad/s] (:meth:`IrradianceSensor.incidence_rate`)."""
+        """d(phi)/dt of the reference photodiode of every world [rad/s]
+        (:meth:`IrradianceSensor.incidence_rate`)."""
         b = self.batch
         ang, lin = b.photodiode_velocity0()
-        los = b.site_pos[:, 2] - b.site_pos[:, 0]
+        los = b.led_pos - b.site_pos[:, b.reference]
         rel = b.transmitter_velocity - lin
         d2 = dot3(los, los)
         los_rate = dot3(cross3(los, rel), b.hinge_axis) / d2

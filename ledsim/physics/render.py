@@ -187,7 +187,8 @@ class FrameRecorder:
         """Record step ``t`` [s]; ``status``: the link supervisor's "ok", "lost" or
         "scanning", or "dropout" while the gate holds a blocked photodiode ("" when the
         run is not supervised)."""
-        self.overlay.push(reading.phi, float(xhat[0]), reading.power[0], reading.power[1])
+        phihat = float(world.config.constants.layout.angle(xhat))
+        self.overlay.push(reading.phi, phihat, *reading.power)
         self.overlay.status = status
         if t + 1e-9 < self.next_t:
             return

@@ -18,6 +18,7 @@ import numpy as np
 
 from ..config import ConfigError, LinkConstants
 from ..errors import LedsimError
+from ..layout import ReceiverLayout
 from ..resources import scene_path
 
 #: Former module-level name of the default scene.
@@ -136,42 +137,49 @@ def build_spec(config: WorldConfig) -> mujoco.MjSpec:
     except Exception as exc:  # mujoco raises ValueError with the parser message
         first = str(exc).strip().splitlines()[0] if str(exc).strip() else type(exc).__name__
         raise WorldError(f"scene file {str(path)!r} is not valid MJCF: {first}") from None
+    c = config.constants
+    layout = c.layout.validate()
     for kind, name in [("body", "auv"), ("body", "gimbal"), ("body", "transmitter"),
-                       ("body", "occluder"), ("site", "pd1"), ("site", "pd2"),
-                       ("site", "led"), ("joint", "gimbal_hinge"),
-                       ("actuator", "gimbal_motor"), ("geom", "hull")]:
+                       ("body", "occluder"),
+                       *(("site", p.site) for p in layout.photodiodes), ("site", "led"),
+                       *(("joint", a.joint) for a in layout.axes),
+                       *(("actuator", a.motor) for a in layout.axes), ("geom", "hull")]:
         if getattr(spec, kind)(name) is None:
             raise WorldError(f"scene file {str(path)!r} has no {kind} named {name!r}")
-    c = config.constants
     spec.option.timestep = config.timestep
     spec.option.integrator = INTEGRATORS[config.integrator]
     spec.option.density = config.water_density
     spec.option.viscosity = config.water_viscosity
 
-    # Photodiode 2's normal is photodiode 1's turned by -dphi about the hinge axis, so
-    # its incidence angle is phi + dphi (paper eq. eq-4a).
-    pd1, pd2 = spec.site("pd1"), spec.site("pd2")
-    normal2 = _rotate_z([1.0, 0.0, 0.0], -c.dphi)
-    _set_zaxis(pd2, normal2)
-    lens2 = spec.geom("pd2_lens")
-    if lens2 is not None:
-        _set_zaxis(lens2, normal2)
+    # Each photodiode's normal is the reference normal (+x of the gimbal) turned by
+    # -offset about the hinge axis, so its incidence angle is phi + offset (paper eq.
+    # eq-4a: offsets 0 and dphi). The reference photodiode keeps the scene's own normal.
+    sites = [spec.site(p.site) for p in layout.photodiodes]
+    for p, site in zip(layout.photodiodes, sites, strict=True):
+        if p.offset == 0.0:
+            continue
+        normal = _rotate_z([1.0, 0.0, 0.0], -p.offset)
+        _set_zaxis(site, normal)
+        lens = spec.geom(f"{p.site}_lens")
+        if lens is not None:
+            _set_zaxis(lens, normal)
 
     # LED at distance d in front of the receiver centre (midpoint of the photodiodes).
     gimbal = spec.body("gimbal")
-    centre_local = 0.5 * (np.asarray(pd1.pos) + np.asarray(pd2.pos))
+    centre_local = np.mean([np.asarray(site.pos) for site in sites], axis=0)
     centre = np.asarray(gimbal.pos) + centre_local
     tx = spec.body("transmitter")
     tx.pos = [centre[0] + c.distance, centre[1] + config.led_lateral_offset, centre[2]]
     _set_yaw(tx, config.led_yaw)
 
-    hinge = spec.joint("gimbal_hinge")
-    hinge.damping = [config.gimbal_damping, 0.0, 0.0]  # MuJoCo 4: damping polynomial
-    motor = spec.actuator("gimbal_motor")
-    motor.ctrlrange = [-config.torque_limit, config.torque_limit]
-    motor.forcerange = [-config.torque_limit, config.torque_limit]
-    motor.forcelimited = mujoco.mjtLimited.mjLIMITED_TRUE
-    motor.ctrllimited = mujoco.mjtLimited.mjLIMITED_TRUE
+    for axis in layout.axes:
+        hinge = spec.joint(axis.joint)
+        hinge.damping = [config.gimbal_damping, 0.0, 0.0]  # MuJoCo 4: damping polynomial
+        motor = spec.actuator(axis.motor)
+        motor.ctrlrange = [-config.torque_limit, config.torque_limit]
+        motor.forcerange = [-config.torque_limit, config.torque_limit]
+        motor.forcelimited = mujoco.mjtLimited.mjLIMITED_TRUE
+        motor.ctrllimited = mujoco.mjtLimited.mjLIMITED_TRUE
     if config.hull_mass is not None:
         spec.geom("hull").mass = config.hull_mass
     return spec
@@ -199,9 +207,10 @@ class SceneIds:
 
     Attributes:
         hull_body, gimbal_body: body ids of the AUV and of the receiver gimbal.
-        photodiode_sites: site ids of photodiodes 1 and 2; led_site: the LED's site id.
-        hinge_qpos, hinge_dof: the gimbal hinge's address in qpos and in qvel.
-        motor: actuator id of the gimbal motor.
+        photodiode_sites: site ids of the layout's photodiodes, in its order; led_site:
+            the LED's site id.
+        hinge_qpos, hinge_dof: the gimbal axis's hinge's address in qpos and in qvel.
+        motor: actuator id of the gimbal axis's motor.
         vehicle_sensors: sensordata addresses of the vehicle's sensors, in the order of
             :data:`VEHICLE_SENSORS` (None: the scene lacks one of them).
         thrusters: actuator ids of the hull's surge, sway, heave, pitch and yaw thrusters
@@ -216,7 +225,7 @@ class SceneIds:
 
     hull_body: int
     gimbal_body: int
-    photodiode_sites: tuple[int, int]
+    photodiode_sites: tuple[int, ...]
     led_site: int
     hinge_qpos: int
     hinge_dof: int
@@ -228,8 +237,11 @@ class SceneIds:
     missing_sensors: tuple[str, ...] = ()
 
     @classmethod
-    def of(cls, m) -> SceneIds:
-        hinge = m.joint("gimbal_hinge")
+    def of(cls, m, layout: ReceiverLayout | None = None) -> SceneIds:
+        """The ids of model ``m`` built for the receiver ``layout`` (None: the paper's)."""
+        layout = LinkConstants().layout if layout is None else layout
+        (axis,) = layout.validate().axes
+        hinge = m.joint(axis.joint)
         sensors = [m.sensor(i).name for i in range(m.nsensor)]
         missing = tuple(n for n in VEHICLE_SENSORS if n not in sensors)
         adr = None if missing else tuple(int(m.sensor(n).adr[0]) for n in VEHICLE_SENSORS)
@@ -240,9 +252,9 @@ class SceneIds:
         sites = [m.site(i).name for i in range(m.nsite)]
         usbl = int(m.site("usbl").id) if "usbl" in sites else None
         return cls(int(m.body("auv").id), int(m.body("gimbal").id),
-                   (int(m.site("pd1").id), int(m.site("pd2").id)), int(m.site("led").id),
-                   int(hinge.qposadr[0]), int(hinge.dofadr[0]),
-                   int(m.actuator("gimbal_motor").id), adr, thrusters, mag, usbl, missing)
+                   tuple(int(m.site(p.site).id) for p in layout.photodiodes),
+                   int(m.site("led").id), int(hinge.qposadr[0]), int(hinge.dofadr[0]),
+                   int(m.actuator(axis.motor).id), adr, thrusters, mag, usbl, missing)
 
 
 #: The vehicle's MuJoCo sensors by name: the IMU's gyro and accelerometer, the DVL (a

@@ -20,6 +20,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from observer.noise import MeasurementNoise
+
 from ..optics import (
     received_power,
     receiver_response_at,
@@ -34,13 +36,15 @@ class SensorReading:
     """One sample of the sensor. Arrays have one entry per photodiode.
 
     Attributes:
-        power: measured photodiode_power with noise [W], shape (2,).
+        power: measured photodiode_power with noise [W], shape (n_pd,), in the
+            receiver layout's order.
         power_clean: the same without noise [W].
         incidence_angle: signed phi of each photodiode [rad].
         emission_angle: theta of each photodiode [rad].
         distance: LED-photodiode distance [m].
         visible_fraction: share of aperture rays that reach the LED [-].
-        phi, phidot: the true state x = (phi, phidot) of photodiode 1 [rad, rad/s].
+        phi, phidot: the true state x = (phi, phidot) of the reference photodiode
+            [rad, rad/s].
         gimbal_angle, gimbal_rate: the gimbal encoder: hinge angle [rad] and rate [rad/s].
         hull_pos: the AUV's position [m], shape (3,).
     """
@@ -71,14 +75,21 @@ class IrradianceSensor:
         seed: seed of the measurement noise.
         noise: add N(0, measurement_noise_var) to each power.
         noise_scale: multiplies the noise standard deviation (x3 disturbance test).
+        measurement_noise: the run's noise object (None: the link's at ``noise_scale``);
+            :attr:`measurement_noise` either way.
     """
 
     def __init__(self, world: LinkWorld, seed: int = 0, noise: bool = True,
-                 noise_scale: float = 1.0):
+                 noise_scale: float = 1.0, measurement_noise: MeasurementNoise | None = None):
         self.world = world
         self.constants = world.config.constants
         self.rng = np.random.default_rng(seed)
-        self.noise_std = self.constants.measurement_noise_std * noise_scale if noise else 0.0
+        self.measurement_noise = (self.constants.measurement_noise(noise_scale)
+                                  if measurement_noise is None else measurement_noise)
+        self.noise_std = self.measurement_noise.std if noise else 0.0
+        self.layout = self.constants.layout
+        self._photodiodes = range(self.layout.n_photodiodes)
+        self._reference = self.layout.reference
         n = world.config.n_rays
         ring = max(n - 1, 0)
         angles = 2 * np.pi * np.arange(ring) / max(ring, 1)
@@ -94,17 +105,18 @@ class IrradianceSensor:
         with w.parked_occluder():  # only the scene itself counts
             reading = self.read(noise=False)
         led = np.round(w.led_pos, 4).tolist()
-        for i in range(2):
+        for i, pd in zip(self._photodiodes, self.layout.photodiodes, strict=True):
+            name = f"photodiode {pd.site!r}"
             if abs(reading.incidence_angle[i]) >= math.pi / 2:
-                raise WorldError(f"LED at {led} m is behind photodiode {i + 1} (incidence "
+                raise WorldError(f"LED at {led} m is behind {name} (incidence "
                                  f"angle {reading.incidence_angle[i]:.2f} rad): no line of "
                                  "sight is possible")
             if reading.emission_angle[i] >= math.pi / 2:
-                raise WorldError(f"LED at {led} m faces away from photodiode {i + 1} "
+                raise WorldError(f"LED at {led} m faces away from {name} "
                                  f"(emission angle {reading.emission_angle[i]:.2f} rad): no "
                                  "line of sight")
             if reading.visible_fraction[i] == 0:
-                raise WorldError(f"LED at {led} m is hidden from photodiode {i + 1} by the "
+                raise WorldError(f"LED at {led} m is hidden from {name} by the "
                                  "scene: no line of sight")
 
     def aperture_points(self) -> np.ndarray:
@@ -132,7 +144,7 @@ class IrradianceSensor:
         return 1.0 - blocked / len(lengths)
 
     def geometry(self) -> tuple[list, list, list, list]:
-        """(d, theta, phi, visible fraction) of both photodiodes at the current state.
+        """(d, theta, phi, visible fraction) of each photodiode at the current state.
 
         Plain-float arithmetic on 3-vectors: several times faster than numpy at this size.
         """
@@ -142,7 +154,7 @@ class IrradianceSensor:
         hx, hy, hz = w.hinge_axis.tolist()
         targets = self.aperture_points()
         dist, theta, phi, vis = [], [], [], []
-        for i in range(2):
+        for i in self._photodiodes:
             px, py, pz = w.photodiode_pos(i).tolist()
             nx, ny, nz = w.photodiode_normal(i).tolist()
             vx, vy, vz = lx - px, ly - py, lz - pz
@@ -167,14 +179,15 @@ class IrradianceSensor:
         return vis * transmitter_gain_at(d, theta, c) * receiver_response_at(phi, c.receiver)
 
     def read(self, noise: bool = True) -> SensorReading:
-        """Sample both photodiodes at the current MjData state."""
+        """Sample every photodiode at the current MjData state."""
         geo = self.geometry()
         clean = np.array([self._clean_power_at(*g) for g in zip(*geo, strict=True)])
         dist, theta, phi, vis = (np.array(v) for v in geo)
-        power = clean + (self.rng.standard_normal(2) * self.noise_std if noise else 0.0)
+        n, ref = len(clean), self._reference
+        power = clean + (self.rng.standard_normal(n) * self.noise_std if noise else 0.0)
         w = self.world
-        return SensorReading(power, clean, phi, theta, dist, vis, float(phi[0]),
-                             self.incidence_rate(0), w.gimbal_angle, w.gimbal_rate,
+        return SensorReading(power, clean, phi, theta, dist, vis, float(phi[ref]),
+                             self.incidence_rate(ref), w.gimbal_angle, w.gimbal_rate,
                              w.hull_pos.copy())
 
     def incidence_rate(self, i: int) -> float:

@@ -144,12 +144,13 @@ def simulate(world: LinkWorld, sensor: IrradianceSensor, seconds: float,
     Te = world.config.constants.Te
     n = int(round(seconds / Te))
     torque = torque or (lambda t: 0.0)
-    geo = np.empty((n, 4, 2))  # d, theta, phi, visible fraction
-    state = np.empty((n, 2))
-    gimbal = np.empty((n, 2))
+    lay = sensor.layout
+    geo = np.empty((n, 4, lay.n_photodiodes))  # d, theta, phi, visible fraction
+    state = np.empty((n, lay.n_state))
+    gimbal = np.empty((n, lay.n_state))
     applied = np.empty(n)
     hull = np.empty((n, 3))
-    power = np.empty((n, 2)) if controller else None
+    power = np.empty((n, lay.n_photodiodes)) if controller else None
     t0 = world.time
     prepare(world, disturbances, t0, vehicle)
     for k in tqdm(range(n), disable=not progress, desc="simulate", leave=False,
@@ -157,7 +158,7 @@ def simulate(world: LinkWorld, sensor: IrradianceSensor, seconds: float,
         t = t0 + k * Te
         if controller is None:
             geo[k] = sensor.geometry()
-            state[k] = geo[k, 2, 0], sensor.incidence_rate(0)
+            state[k] = geo[k, 2, lay.reference], sensor.incidence_rate(lay.reference)
             u = torque(t)
         else:
             r = sensor.read()

@@ -32,8 +32,8 @@ import numpy as np
 from observer.system import DiscreteSystem
 
 from ..optics import (
-    pair_power,
-    pair_power_jacobian,
+    layout_power,
+    layout_power_jacobian,
     plausible_power_range,
     receiver_response_at,
     step_form,
@@ -70,7 +70,8 @@ class GimbalSystem(DiscreteSystem):
         self.domain_high = np.array(domain, dtype=float)
         self.domain_low = -self.domain_high
         self.process_noise_std = np.array(c.process_noise_std, dtype=float)
-        self.measurement_noise_std = np.full(2, c.measurement_noise_std)
+        self.measurement_noise = c.measurement_noise()
+        self.measurement_noise_std = self.measurement_noise.std_at()
         self.output_low, self.output_high = plausible_power_range(c)
         self.inertia = self.world.hinge_inertia()
         self.world.reset()
@@ -160,12 +161,14 @@ class IdentifiedGimbalModel(DiscreteSystem):
         self.Te = source.Te
         self.domain_low, self.domain_high = source.domain_low, source.domain_high
         self.process_noise_std = source.process_noise_std
+        self.measurement_noise = source.measurement_noise
         self.measurement_noise_std = source.measurement_noise_std
         self.output_low, self.output_high = source.output_low, source.output_high
         self.coef_phi = np.asarray(coef_phi, dtype=float)
         self.coef_rate = np.asarray(coef_rate, dtype=float)
         self._coef_phi, self._coef_rate = self.coef_phi.tolist(), self.coef_rate.tolist()
         self.power_gain = float(power_gain)
+        self._offsets = self.constants.layout.offsets
         self.inertia = source.inertia
         self.torque_for = source.torque_for
 
@@ -182,7 +185,7 @@ class IdentifiedGimbalModel(DiscreteSystem):
         coef_rate = np.linalg.lstsq(feats, xn[:, 1], rcond=None)[0]
         phis = np.linspace(-0.6, 0.6, 61)
         y = source.h(np.stack([phis, 0 * phis], -1))
-        g = pair_power(1.0, phis, source.constants)
+        g = layout_power(1.0, phis, source.constants)
         gain = float((g * y).sum() / (g * g).sum())
         return cls(source, coef_phi, coef_rate, gain)
 
@@ -203,10 +206,9 @@ class IdentifiedGimbalModel(DiscreteSystem):
 
     def h(self, x):
         if np.ndim(x) == 1:  # one sample: plain floats
-            phi, c, k = float(x[0]), self.constants, self.power_gain
-            return np.array([k * receiver_response_at(phi, c.receiver),
-                             k * receiver_response_at(phi + c.dphi, c.receiver)])
-        return pair_power(self.power_gain, np.asarray(x, dtype=float)[..., 0], self.constants)
+            phi, r, k = float(x[0]), self.constants.receiver, self.power_gain
+            return np.array([k * receiver_response_at(phi + o, r) for o in self._offsets])
+        return layout_power(self.power_gain, self.constants.layout.angle(x), self.constants)
 
     def step_form(self):
         """f and h for an exported observer (:class:`observer.export.StepForm`)."""
@@ -223,8 +225,8 @@ class IdentifiedGimbalModel(DiscreteSystem):
         return jac
 
     def h_jacobian(self, x, eps=None):
-        return pair_power_jacobian(self.power_gain, np.asarray(x, dtype=float)[..., 0],
-                                   self.constants)
+        return layout_power_jacobian(self.power_gain, self.constants.layout.angle(x),
+                                     self.constants)
 
     def metadata(self) -> dict:
         meta = dict(self.source_metadata)

@@ -82,7 +82,7 @@ class LinkWorld(HullAccess):
         self._no_autoreset = bool(self.model.opt.disableflags & _AUTORESET_OFF)
         m = self.model
         #: Named MuJoCo ids and addresses, for code that works on MuJoCo's arrays.
-        self.ids = ids = SceneIds.of(m)
+        self.ids = ids = SceneIds.of(m, self.config.constants.layout)
         self._auv, self._gimbal = ids.hull_body, ids.gimbal_body
         self._tx_mocap = m.body_mocapid[m.body("transmitter").id]
         self._occluder_mocap = m.body_mocapid[m.body("occluder").id]

@@ -1,0 +1,167 @@
+"""The receiver as data: its photodiodes and its gimbal's axes.
+
+A :class:`ReceiverLayout` says which photodiodes the receiver head carries (the scene's
+site of each, the name of its power in traces and results, and how its normal is turned
+from the reference normal) and which axes the gimbal turns about (the scene's joint,
+motor and encoder of each). The measurement ``y`` has one entry per photodiode, in the
+layout's order; the state has an angle and a rate per axis.
+
+The paper's receiver (eq. eq-4a) is :func:`paper_layout`: two photodiodes on one axis,
+the second's normal turned by Delta phi, so that its incidence angle is phi + Delta phi.
+It is the only layout shipped: the scene, the observers' training and the ONNX export
+are built for it, and :meth:`ReceiverLayout.validate` says so for any other.
+
+This module is where a series is tied to its position; everything else names them
+(:meth:`ReceiverLayout.power_columns`, :meth:`ReceiverLayout.state_columns`).
+"""
+
+from __future__ import annotations
+
+import functools
+from dataclasses import dataclass
+
+import numpy as np
+
+from .errors import LedsimError
+
+
+class LayoutError(LedsimError):
+    """A receiver layout that cannot be built or is not supported."""
+
+
+@dataclass(frozen=True)
+class Photodiode:
+    """One photodiode of the receiver head.
+
+    Attributes:
+        site: the scene's site at its centre, z axis along its normal (its lens geom,
+            when the scene has one, is ``<site>_lens``).
+        series: the name of its measured power in traces and results ("p1").
+        offset: its incidence angle less the reference photodiode's [rad]: its normal
+            is the reference normal turned by ``-offset`` about the gimbal's axis.
+    """
+
+    site: str
+    series: str
+    offset: float
+
+
+@dataclass(frozen=True)
+class GimbalAxis:
+    """One axis the receiver gimbal turns about.
+
+    Attributes:
+        name: what the axis is ("azimuth").
+        joint, motor, encoder: the scene's hinge joint, its motor (actuator) and its
+            encoder (a ``jointpos`` sensor).
+        angle, rate: the names of the state's angle [rad] and rate [rad/s] about it
+            (the incidence angle of the reference photodiode and its derivative).
+    """
+
+    name: str
+    joint: str
+    motor: str
+    encoder: str
+    angle: str = "phi"
+    rate: str = "phidot"
+
+
+@dataclass(frozen=True)
+class ReceiverLayout:
+    """The receiver's photodiodes and the gimbal's axes (see the module's text)."""
+
+    photodiodes: tuple[Photodiode, ...]
+    axes: tuple[GimbalAxis, ...]
+
+    def __post_init__(self) -> None:
+        if not self.photodiodes:
+            raise LayoutError("a receiver layout needs at least one photodiode")
+        if not self.axes:
+            raise LayoutError("a receiver layout needs at least one gimbal axis")
+        for kind, names in (("site", [p.site for p in self.photodiodes]),
+                            ("series", [p.series for p in self.photodiodes]),
+                            ("axis", [a.name for a in self.axes])):
+            if len(set(names)) != len(names):
+                raise LayoutError(f"photodiode or axis {kind} names {names!r} repeat: "
+                                  "each must be unique")
+
+    @property
+    def n_photodiodes(self) -> int:
+        return len(self.photodiodes)
+
+    @property
+    def n_axes(self) -> int:
+        return len(self.axes)
+
+    @property
+    def n_state(self) -> int:
+        """An angle and a rate per axis."""
+        return 2 * self.n_axes
+
+    @property
+    def offsets(self) -> tuple[float, ...]:
+        """Each photodiode's incidence angle less the reference's [rad]."""
+        return tuple(p.offset for p in self.photodiodes)
+
+    @property
+    def power_series(self) -> tuple[str, ...]:
+        """The names of the measured powers, in the order of ``y``."""
+        return tuple(p.series for p in self.photodiodes)
+
+    @property
+    def state_series(self) -> tuple[str, ...]:
+        """The names of the state's entries, in the order of ``x``."""
+        return tuple(n for a in self.axes for n in (a.angle, a.rate))
+
+    @property
+    def reference(self) -> int:
+        """Index of the reference photodiode (offset 0): its incidence angle is phi, and
+        the link's data (availability, the link budget) ride on it."""
+        return self.offsets.index(0.0)
+
+    def validate(self) -> ReceiverLayout:
+        """Refuse what the shipped world cannot simulate yet: one axis and a photodiode
+        with offset 0 (the reference) are needed."""
+        if self.n_axes != 1:
+            raise LayoutError(f"{self.n_axes} gimbal axes are not supported yet: the "
+                              "scene and the observers have one axis")
+        if 0.0 not in self.offsets:
+            raise LayoutError(f"offsets {list(self.offsets)!r} have no reference "
+                              "photodiode: one offset must be 0")
+        return self
+
+    def power_columns(self, array, suffix: str = "", prefix: str = "") -> dict[str, np.ndarray]:
+        """``{prefix + series + suffix: column}`` of an array whose last axis is the
+        photodiodes."""
+        a = np.asarray(array)
+        return {prefix + p.series + suffix: a[..., i] for i, p in enumerate(self.photodiodes)}
+
+    def state_columns(self, array, suffix: str = "") -> dict[str, np.ndarray]:
+        """``{name + suffix: column}`` of an array whose last axis is the state."""
+        a = np.asarray(array)
+        return {n + suffix: a[..., i] for i, n in enumerate(self.state_series)}
+
+    def reference_power(self, array) -> np.ndarray:
+        """The reference photodiode's column of an array over the photodiodes (its power,
+        distance, emission angle...)."""
+        return np.asarray(array)[..., self.reference]
+
+    def angle(self, x) -> np.ndarray:
+        """The first axis's angle [rad] of states ``x`` (last axis the state)."""
+        return np.asarray(x)[..., 0]
+
+    def rate(self, x) -> np.ndarray:
+        """The first axis's rate [rad/s] of states ``x`` (last axis the state)."""
+        return np.asarray(x)[..., 1]
+
+
+#: The paper's gimbal: one vertical hinge (azimuth), its motor and its encoder.
+AZIMUTH = GimbalAxis("azimuth", "gimbal_hinge", "gimbal_motor", "gimbal_encoder")
+
+
+@functools.lru_cache(maxsize=16)
+def paper_layout(dphi: float) -> ReceiverLayout:
+    """The paper's receiver (eq. eq-4a): photodiodes ``pd1`` (incidence angle phi) and
+    ``pd2`` (phi + ``dphi`` [rad]) on the azimuth axis."""
+    return ReceiverLayout((Photodiode("pd1", "p1", 0.0), Photodiode("pd2", "p2", dphi)),
+                          (AZIMUTH,))
