@@ -49,8 +49,7 @@ def receiver_response_at(phi: float, r: ReceiverResponse) -> float:
 
 def receiver_response_derivative(phi, r: ReceiverResponse) -> np.ndarray:
     """dg/dphi [1/rad]."""
-    u1, u2, e1, e2 = response_terms(np.asarray(phi, dtype=float), r)
-    return -2 * (phi - r.b1) / r.c1**2 * e1 - 2 * (phi + r.b2) / r.c2**2 * e2
+    return response_slope(*response_terms(np.asarray(phi, dtype=float), r), r)
 
 
 def led_intensity(theta, c: LinkConstants) -> np.ndarray:
