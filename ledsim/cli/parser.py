@@ -70,6 +70,18 @@ def _add_run_knobs(p) -> None:
                    help="particle-filter size")
 
 
+def _add_start_arg(p) -> None:
+    """The run's start (run, render, sweep)."""
+    from ..loop.config import MAX_INITIAL_ANGLE
+
+    p.add_argument("--initial-angle", type=number(-MAX_INITIAL_ANGLE, MAX_INITIAL_ANGLE,
+                                                  "rad"),
+                   default=None, metavar="RAD",
+                   help="true incidence angle phi at the start, at rest [rad] (default: "
+                   "the scenario's; beyond about 0.6 rad the LED is outside the field of "
+                   "view)")
+
+
 def _add_vehicle_args(p) -> None:
     """The vehicle's flags (run, render, sweep, demo)."""
     p.add_argument("--no-imu", action="store_true",
@@ -215,6 +227,7 @@ def build_parser() -> argparse.ArgumentParser:
     rn = command("run", "closed loop in MuJoCo: estimator + controller + gimbal")
     _add_loop_args(rn)
     _add_run_knobs(rn)
+    _add_start_arg(rn)
     rn.add_argument("--noise-scale", type=NOISE_SCALE, default=W.noise_scale,
                     help="multiplies the measurement-noise std")
     rn.add_argument("--seeds", type=SEEDS, default=X.seeds,
@@ -238,6 +251,7 @@ def build_parser() -> argparse.ArgumentParser:
 
     rd = command("render", "render a closed-loop run to an H.264 mp4 (headless)")
     _add_loop_args(rd)
+    _add_start_arg(rd)
     rd.add_argument("--seconds", type=number(0.0, 600.0, "s", lo_open=True), default=6.0,
                     help="[s]")
     rd.add_argument("--width", type=number(-10_000, 10_000, integer=True), default=640,
@@ -271,6 +285,7 @@ def build_parser() -> argparse.ArgumentParser:
     sw.add_argument("--scenario", default=T.scenario, **_choices(PHYSICS_SCENARIOS),
                     help="closed-loop scenario")
     _add_run_knobs(sw)
+    _add_start_arg(sw)
     sw.add_argument("--no-supervision", action="store_true",
                     help="no loss detection or reacquisition (see ledsim run)")
     _add_vehicle_args(sw)

@@ -43,6 +43,10 @@ pointing earns reward. **Episode**: never terminates (a lost link can be found a
 truncated after 1000 steps (10 s) by ``gymnasium.make``.
 ``info`` holds the true state (``phi`` [rad], ``phidot`` [rad/s]), the noise-free
 powers and the time [s], for evaluation only.
+
+**Start**: the scenario's (``align``: 0.3 rad), or uniform in +-``phi0_range`` without
+a scenario; ``reset(options={"initial_angle": RAD})`` starts the episode at that true
+incidence angle, at rest, whatever the scenario (``ledsim run --initial-angle``).
 """
 
 from __future__ import annotations
@@ -58,7 +62,7 @@ from gymnasium.utils import EzPickle
 from ..config import LinkConstants
 from ..control import receiver_peak
 from ..loop.closed_loop import start_world
-from ..loop.config import EstimatorPart, RunConfig, TaskPart, WorldPart
+from ..loop.config import MAX_INITIAL_ANGLE, EstimatorPart, RunConfig, TaskPart, WorldPart
 from ..loop.estimation import run_noise
 from ..optics import IMPOSSIBLE_SIGMAS, achievable_power, peak_power
 from ..physics.sensor import SensorReading
@@ -73,6 +77,18 @@ VEHICLE_BOUND = np.array([60.0, 5.0, 5.0, math.pi, 100.0])
 #: observation space's upper bound is the power there.
 MIN_DISTANCE = 0.01
 
+
+
+def initial_angle(value) -> float:
+    """``options["initial_angle"]`` of :meth:`LinkAlignEnv.reset`, checked [rad]."""
+    try:
+        a = float(value)
+    except (TypeError, ValueError):
+        raise ValueError(f"initial_angle {value!r} is not allowed: a number of rad") from None
+    if not (math.isfinite(a) and abs(a) <= MAX_INITIAL_ANGLE):
+        raise ValueError(f"initial_angle {value!r} is not allowed: must be in "
+                         f"[-{MAX_INITIAL_ANGLE:g}, {MAX_INITIAL_ANGLE:g}] rad")
+    return a
 
 class LinkAlignEnv(gym.Env, EzPickle):
     """Keep the receiver aligned on the LED beam (see the module docstring).
@@ -191,6 +207,9 @@ class LinkAlignEnv(gym.Env, EzPickle):
         x0 = None
         if self.random_start:
             x0 = (float(self.np_random.uniform(-self.phi0_range, self.phi0_range)), 0.0)
+        angle = (options or {}).get("initial_angle")
+        if angle is not None:  # the user's start overrides the scenario's and the random one
+            x0 = (initial_angle(angle), 0.0)
         if seed is None or self.random_start:
             self.run_seed = int(self.np_random.integers(2**31))
         else:

@@ -165,7 +165,8 @@ class LoopRun:
 
     def result(self, times: np.ndarray) -> SimulationResult:
         return SimulationResult.from_steps(times, self.geo, self.state, self.gimbal,
-                                           self.applied, self.power, self.clean, self.hull)
+                                           self.applied, self.power, self.clean, self.hull,
+                                           self.world.config.constants.layout)
 
 
 class ClosedLoop:

@@ -13,7 +13,7 @@ paper-closed-loop   start at 0.2 rad; the paper's u = -0.001 phidot_hat
 from __future__ import annotations
 
 import math
-from dataclasses import asdict, dataclass, fields
+from dataclasses import asdict, dataclass, fields, replace
 
 from ..config import PAPER_DISTANCE, LinkConstants, NavigationNoise
 from ..control import AlignmentPID, Excitation, PaperRateDamping
@@ -47,6 +47,9 @@ LOOP_ESTIMATORS = tuple(n for n in ESTIMATORS if n not in ("kkl-paper", "kkl-han
 COMPARED_ESTIMATORS = tuple(n for n in LOOP_ESTIMATORS if n != "kkl-scheduled")
 OMEGA_MODELS = ("identified", "simulator", "none")
 FILTER_DISTANCES = ("configured", "nominal")
+#: Largest |initial angle| [rad] a run may start at: the LED must stay in front of the
+#: photodiodes (|phi| < pi/2 with the photodiodes' offset to spare).
+MAX_INITIAL_ANGLE = 1.4
 
 
 def navigation_noise(settings: tuple[str, ...]) -> NavigationNoise:
@@ -118,12 +121,16 @@ class TaskPart:
         seconds: length of a run [s] (None: the scenario's).
         supervision: watch the estimate, flag a lost link and reacquire it with a scan
             (:mod:`ledsim.loop.supervisor`); off: the estimator alone drives the motor.
+        initial_angle: the true incidence angle phi at the start [rad], at rest (None:
+            the scenario's); |phi| <= :data:`MAX_INITIAL_ANGLE`. Beyond about 0.6 rad the
+            LED is outside the receiver's field of view.
     """
 
     scenario: str = "align"
     disturbances: tuple[str, ...] = ()
     seconds: float | None = None
     supervision: bool = True
+    initial_angle: float | None = None
 
 
 @dataclass(frozen=True)
@@ -210,6 +217,7 @@ class RunConfig:
     imu_noise: tuple[str, ...] = WorldPart.imu_noise
     station_keeping_gains: tuple[str, ...] = WorldPart.station_keeping_gains
     window: float | None = ExecutionPart.window
+    initial_angle: float | None = TaskPart.initial_angle
 
     @classmethod
     def of(cls, world: WorldPart = WorldPart(), task: TaskPart = TaskPart(),
@@ -253,6 +261,10 @@ class RunConfig:
                            f">= {Te:g} s (one control period)"))
         if self.window is not None:
             checks.append(("--window", self.window, self.window > 0, "> 0 s"))
+        if self.initial_angle is not None:
+            checks.append(("--initial-angle", self.initial_angle,
+                           abs(self.initial_angle) <= MAX_INITIAL_ANGLE,
+                           f"in [-{MAX_INITIAL_ANGLE:g}, {MAX_INITIAL_ANGLE:g}] rad"))
         for flag, value, ok, allowed in checks:
             if not (ok and math.isfinite(value)):
                 raise LedsimError(f"{flag} {value!r} is not allowed: must be {allowed}")
@@ -262,7 +274,11 @@ class RunConfig:
 
     @property
     def scenario_spec(self) -> Scenario:
-        return PHYSICS_SCENARIOS[self.scenario]
+        """The scenario, started at ``initial_angle`` (at rest) when one is set."""
+        spec = PHYSICS_SCENARIOS[self.scenario]
+        if self.initial_angle is None:
+            return spec
+        return replace(spec, x0=(float(self.initial_angle), 0.0))
 
     @property
     def steady_from(self) -> float:

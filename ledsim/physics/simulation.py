@@ -19,7 +19,9 @@ from pathlib import Path
 import numpy as np
 from tqdm.auto import tqdm
 
+from ..config import LinkConstants
 from ..errors import LedsimError
+from ..layout import ReceiverLayout
 from ..outputs import atomic_write_bytes
 from .sensor import IrradianceSensor, SensorReading
 from .tick import advance, prepare
@@ -57,7 +59,7 @@ class SimulationResult(SensorReading):
     """Time series of a run: the fields of :class:`SensorReading`, one row per control
     step (phi [rad], phidot [rad/s], gimbal_angle [rad], gimbal_rate [rad/s]: (N,);
     power, power_clean [W], incidence_angle, emission_angle [rad], distance [m],
-    visible_fraction: (N, 2); hull_pos [m]: (N, 3)), and
+    visible_fraction: (N, n_pd); hull_pos [m]: (N, 3)), and
 
     Attributes:
         t: time of each step [s], (N,).
@@ -77,11 +79,15 @@ class SimulationResult(SensorReading):
     @classmethod
     def from_steps(cls, t: np.ndarray, geo: np.ndarray, state: np.ndarray,
                    gimbal: np.ndarray, torque: np.ndarray, power: np.ndarray,
-                   power_clean: np.ndarray, hull: np.ndarray) -> SimulationResult:
-        """From per-step arrays: ``geo`` (N, 4, 2) distance, theta, phi and visible
-        fraction of both photodiodes; ``state`` and ``gimbal`` (N, 2) (value, rate)."""
-        return cls(t=t, phi=state[:, 0], phidot=state[:, 1], gimbal_angle=gimbal[:, 0],
-                   gimbal_rate=gimbal[:, 1], torque=torque, power=power,
+                   power_clean: np.ndarray, hull: np.ndarray,
+                   layout: ReceiverLayout | None = None) -> SimulationResult:
+        """From per-step arrays: ``geo`` (N, 4, n_pd) distance, theta, phi and visible
+        fraction of each photodiode; ``state`` (the true state) and ``gimbal`` (the
+        encoder's angle and rate) (N, n_state), named by ``layout`` (None: the paper's)."""
+        lay = LinkConstants().layout if layout is None else layout
+        return cls(t=t, phi=lay.angle(state), phidot=lay.rate(state),
+                   gimbal_angle=lay.angle(gimbal), gimbal_rate=lay.rate(gimbal),
+                   torque=torque, power=power,
                    power_clean=power_clean, incidence_angle=geo[:, 2],
                    emission_angle=geo[:, 1], distance=geo[:, 0],
                    visible_fraction=geo[:, 3], occluded=geo[:, 3] < 1.0, hull_pos=hull)
@@ -173,4 +179,4 @@ def simulate(world: LinkWorld, sensor: IrradianceSensor, seconds: float,
     if power is None:
         power = clean + sensor.rng.standard_normal(clean.shape) * sensor.noise_std
     return SimulationResult.from_steps(t0 + np.arange(n) * Te, geo, state, gimbal, applied,
-                                       power, clean, hull)
+                                       power, clean, hull, lay)
