@@ -69,16 +69,36 @@ class Decision:
 
 
 class Unsupervised:
-    """The supervisor of a run without supervision: the estimator alone, always trusted."""
+    """The supervisor of a run without supervision: the estimator alone, always trusted.
 
-    def __init__(self, estimator):
+    With ``slew`` (a :class:`~ledsim.loop.slew.TimeOptimalSlew`), the run starts by
+    slewing the encoder to where the estimate puts the alignment target ``phi_ref``
+    [rad] (the oracle's minimum-time acquisition: its estimate is the truth), and hands
+    over to the control law on arrival (within ``arrive_tol`` [rad], under
+    ``arrive_rate`` [rad/s]).
+    """
+
+    def __init__(self, estimator, slew=None, phi_ref: float = 0.0,
+                 arrive_tol: float = 0.005, arrive_rate: float = 0.3):
         self.estimator = estimator
+        self.slew = slew
+        self.phi_ref = phi_ref
+        self.arrive_tol, self.arrive_rate = arrive_tol, arrive_rate
 
     #: The powers reach the estimator as they are (a link supervisor rescales them).
     gain_ratio = 1.0
 
     def step(self, t: float, y: np.ndarray, q: float, qdot: float) -> Decision:
-        return Decision(self.estimator.update(y), False)
+        xhat = self.estimator.update(y)
+        if self.slew is None:
+            return Decision(xhat, False)
+        phi, phidot = xhat  # the one axis's angle and rate
+        error = float(phi) - self.phi_ref  # phi = phi_home - q: the encoder's way to go
+        if abs(error) < self.arrive_tol and abs(float(phidot)) < self.arrive_rate:
+            self.slew = None
+            return Decision(xhat, False, reseeded=True, reason="acquired")
+        return Decision(xhat, False, True, self.slew.torque(q, qdot, q + error),
+                        reason="acquiring")
 
     def predict(self, u) -> None:
         self.estimator.predict(u)

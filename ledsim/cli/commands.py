@@ -217,7 +217,8 @@ def sweep(args) -> int:
     base = RunConfig(scenario=args.scenario, torque_limit=args.torque_limit,
                      particles=args.particles, seconds=args.seconds, scene=args.scene,
                      supervision=not args.no_supervision, integrator=args.integrator,
-                     initial_angle=args.initial_angle, **_vehicle(args))
+                     initial_angle=args.initial_angle, acquisition=args.acquisition,
+                     **_vehicle(args))
     base.validate()
     _check_vehicle(base)
     grid = SweepGrid(estimators=args.estimator or ["kkl"],

@@ -7,11 +7,19 @@ import argparse
 import math
 
 from ..config import PAPER_DISTANCE
+from .groups import (
+    add_loop_args,
+    add_run_knobs,
+    add_scene_args,
+    add_start_arg,
+    add_vehicle_args,
+    add_world_args,
+    choices,
+)
 from .options import (
     DISTANCE,
     DPHI_DEG,
     NOISE_SCALE,
-    PARTICLES,
     SECONDS,
     SEED,
     SEEDS,
@@ -39,92 +47,6 @@ class _Help(argparse.ArgumentDefaultsHelpFormatter):
         return f"{text} (default: %(default)s)".strip()
 
 
-def _choices(registry) -> dict:
-    return dict(choices=list(registry), metavar="{" + ",".join(registry) + "}")
-
-
-def _add_world_args(p, distance_help="link distance d [m]") -> None:
-    p.add_argument("--distance", type=DISTANCE, default=PAPER_DISTANCE, help=distance_help)
-    _add_scene_args(p)
-
-
-def _add_scene_args(p) -> None:
-    from ..physics.scene import INTEGRATORS
-
-    p.add_argument("--scene", help="MJCF scene file (default: the shipped led_link.xml)")
-    from ..loop.config import WorldPart
-
-    p.add_argument("--integrator", default=WorldPart.integrator, **_choices(INTEGRATORS),
-                   help="MuJoCo integrator (docs/physics.md compares them)")
-
-
-def _add_run_knobs(p) -> None:
-    """Knobs every run of ``run`` and ``sweep`` shares: length, particles, torque limit."""
-    from ..loop.config import EstimatorPart, WorldPart
-
-    p.add_argument("--torque-limit", type=TORQUE_LIMIT, default=WorldPart.torque_limit,
-                   help="[N m]")
-    p.add_argument("--seconds", type=SECONDS, default=None,
-                   help="length of each run [s] (default: the scenario's, 10 s)")
-    p.add_argument("--particles", type=PARTICLES, default=EstimatorPart.particles,
-                   help="particle-filter size")
-
-
-def _add_start_arg(p) -> None:
-    """The run's start (run, render, sweep)."""
-    from ..loop.config import MAX_INITIAL_ANGLE
-
-    p.add_argument("--initial-angle", type=number(-MAX_INITIAL_ANGLE, MAX_INITIAL_ANGLE,
-                                                  "rad"),
-                   default=None, metavar="RAD",
-                   help="true incidence angle phi at the start, at rest [rad] (default: "
-                   "the scenario's; beyond about 0.6 rad the LED is outside the field of "
-                   "view)")
-
-
-def _add_vehicle_args(p) -> None:
-    """The vehicle's flags (run, render, sweep, demo)."""
-    p.add_argument("--no-imu", action="store_true",
-                   help="the control step uses the photodiodes and the gimbal torque only, "
-                   "as in the paper: no IMU, DVL or encoder feed-forward")
-    p.add_argument("--no-station-keeping", action="store_true",
-                   help="the vehicle's thrusters stay idle: the hull drifts with the water")
-    p.add_argument("--imu-noise", action="append", default=[], metavar="KEY=VALUE",
-                   help="a noise figure of the vehicle's sensors (ledsim.config."
-                   "NavigationNoise: gyro_noise_density, dvl_noise, fix_noise, ...; "
-                   "repeatable or comma-joined)")
-    p.add_argument("--station-keeping-gain", action="append", default=[],
-                   metavar="KEY=VALUE",
-                   help="a gain of the station keeping (ledsim.physics.vehicle."
-                   "StationKeeping: kp, kd, kp_pitch, kd_pitch, kp_yaw, kd_yaw, "
-                   "observer_time; repeatable or comma-joined)")
-
-
-def _add_loop_args(p) -> None:
-    from ..loop.config import LOOP_ESTIMATORS, PHYSICS_SCENARIOS, EstimatorPart, TaskPart
-    from ..physics.disturbances import DISTURBANCES
-
-    p.add_argument("--scenario", default=TaskPart.scenario, **_choices(PHYSICS_SCENARIOS),
-                   help="closed-loop scenario")
-    p.add_argument("--estimator", default=EstimatorPart.estimator,
-                   **_choices(LOOP_ESTIMATORS),
-                   help="estimator in the loop (oracle: handed the true state)")
-    p.add_argument("--disturbance", action="append", default=[], metavar="SPEC",
-                   help="name[:key=value,...] with name in " + ", ".join(DISTURBANCES)
-                   + " (repeatable)")
-    p.add_argument("--filter-distance", default=EstimatorPart.filter_distance,
-                   **_choices(("configured", "nominal")),
-                   help="what the EKF, UKF and PF know of the distance: the configured "
-                   "one's model, or the nominal 0.085 m model plus the supervisor's gain "
-                   "tracker (what the KKL knows)")
-    p.add_argument("--no-supervision", action="store_true",
-                   help="no loss detection, gain tracking or reacquisition scan: the "
-                   "estimator alone drives the motor (and the KKL is the shipped one of "
-                   "--distance)")
-    _add_vehicle_args(p)
-    _add_world_args(p)
-
-
 def build_parser() -> argparse.ArgumentParser:
     from .. import __version__
     from ..paper.scenarios import PAPER_SCENARIOS
@@ -150,7 +72,7 @@ def build_parser() -> argparse.ArgumentParser:
                               parents=[common])
 
     ev = command("evaluate", "paper Table 1/2 experiment: KKL vs EKF/UKF/PF")
-    ev.add_argument("--scenario", required=True, **_choices(PAPER_SCENARIOS))
+    ev.add_argument("--scenario", required=True, **choices(PAPER_SCENARIOS))
     ev.add_argument("--distance", type=DISTANCE, default=PAPER_DISTANCE,
                     help="link distance d [m]")
     ev.add_argument("--dphi-deg", "--dphi", dest="dphi", type=DPHI_DEG, default=6.0,
@@ -166,9 +88,9 @@ def build_parser() -> argparse.ArgumentParser:
     ev.add_argument("--out", required=True, help="output folder")
 
     tr = command("train", "learn a KKL observer (Algorithm 1) and save it")
-    tr.add_argument("--world", default="closed-form", **_choices(("closed-form", "mujoco")),
+    tr.add_argument("--world", default="closed-form", **choices(("closed-form", "mujoco")),
                     help="whose transitions: the paper's model, or the MuJoCo world itself")
-    tr.add_argument("--design", default=None, **_choices(PRESETS),
+    tr.add_argument("--design", default=None, **choices(PRESETS),
                     help="observer preset (default: default; in MuJoCo the bank's preset "
                          "for --noise-scale)")
     tr.add_argument("--distance", type=DISTANCE, default=PAPER_DISTANCE,
@@ -185,7 +107,7 @@ def build_parser() -> argparse.ArgumentParser:
     ex = command("export", "one step of a KKL observer as an ONNX graph (for the vehicle)")
     ex.add_argument("--checkpoint", help="KKL checkpoint (default: the shipped MuJoCo "
                     "observer of d = 0.085 m)")
-    ex.add_argument("--format", default="onnx", **_choices(("onnx",)), help="file format")
+    ex.add_argument("--format", default="onnx", **choices(("onnx",)), help="file format")
     ex.add_argument("--out", required=True, help="output file (.onnx)")
 
     rp = command("replay", "feed a saved trace's estimator inputs to a fresh estimator "
@@ -198,7 +120,7 @@ def build_parser() -> argparse.ArgumentParser:
 
     sim = command("simulate", "run the MuJoCo world headless; save series + plot")
     sim.add_argument("--seconds", type=SECONDS, default=5.0, help="duration [s]")
-    sim.add_argument("--torque-profile", default="zero", **_choices(TORQUE_PROFILES),
+    sim.add_argument("--torque-profile", default="zero", **choices(TORQUE_PROFILES),
                      help="gimbal torque")
     sim.add_argument("--torque-amplitude", type=number(-10.0, 10.0, "N m"), default=0.002,
                      help="[N m]")
@@ -209,7 +131,7 @@ def build_parser() -> argparse.ArgumentParser:
     sim.add_argument("--disturbance", action="append", default=[], metavar="SPEC",
                      help="name[:key=value,...] with name in " + ", ".join(DISTURBANCES)
                      + " (repeatable)")
-    _add_world_args(sim)
+    add_world_args(sim)
     sim.add_argument("--dphi-deg", "--dphi", dest="dphi", type=DPHI_DEG, default=6.0,
                      help="angle between the photodiode normals [deg]")
     sim.add_argument("--led-yaw-deg", "--led-yaw", dest="led_yaw",
@@ -225,16 +147,16 @@ def build_parser() -> argparse.ArgumentParser:
     sim.add_argument("--out", required=True, help="output folder")
 
     rn = command("run", "closed loop in MuJoCo: estimator + controller + gimbal")
-    _add_loop_args(rn)
-    _add_run_knobs(rn)
-    _add_start_arg(rn)
+    add_loop_args(rn)
+    add_run_knobs(rn)
+    add_start_arg(rn)
     rn.add_argument("--noise-scale", type=NOISE_SCALE, default=W.noise_scale,
                     help="multiplies the measurement-noise std")
     rn.add_argument("--seeds", type=SEEDS, default=X.seeds,
                     help="Monte-Carlo runs (seeds 0..N-1)")
     rn.add_argument("--checkpoint", help="KKL checkpoint trained on the MuJoCo world")
     rn.add_argument("--omega-model", default=E.omega_model,
-                    **_choices(("identified", "simulator", "none")),
+                    **choices(("identified", "simulator", "none")),
                     help="f used by the KKL's Omega correction")
     rn.add_argument("--workers", type=WORKERS, default=X.workers, help="processes")
     rn.add_argument("--no-plot", action="store_true", help="skip run.png")
@@ -250,8 +172,8 @@ def build_parser() -> argparse.ArgumentParser:
     rn.add_argument("--out", required=True, help="output folder")
 
     rd = command("render", "render a closed-loop run to an H.264 mp4 (headless)")
-    _add_loop_args(rd)
-    _add_start_arg(rd)
+    add_loop_args(rd)
+    add_start_arg(rd)
     rd.add_argument("--seconds", type=number(0.0, 600.0, "s", lo_open=True), default=6.0,
                     help="[s]")
     rd.add_argument("--width", type=number(-10_000, 10_000, integer=True), default=640,
@@ -282,15 +204,15 @@ def build_parser() -> argparse.ArgumentParser:
     sw.add_argument("--noise-scale", action="append", type=NOISE_SCALE,
                     help="multiplies the measurement-noise std (repeatable; default: 1)")
     sw.add_argument("--seeds", type=SEEDS, default=2, help="runs per combination")
-    sw.add_argument("--scenario", default=T.scenario, **_choices(PHYSICS_SCENARIOS),
+    sw.add_argument("--scenario", default=T.scenario, **choices(PHYSICS_SCENARIOS),
                     help="closed-loop scenario")
-    _add_run_knobs(sw)
-    _add_start_arg(sw)
+    add_run_knobs(sw)
+    add_start_arg(sw)
     sw.add_argument("--no-supervision", action="store_true",
                     help="no loss detection or reacquisition (see ledsim run)")
-    _add_vehicle_args(sw)
-    _add_scene_args(sw)
-    sw.add_argument("--backend", default="local", **_choices(BACKENDS),
+    add_vehicle_args(sw)
+    add_scene_args(sw)
+    sw.add_argument("--backend", default="local", **choices(BACKENDS),
                     help="local processes, or Ray (pip install 'ledsim[ray]')")
     sw.add_argument("--address", default=None,
                     help="Ray cluster to join (e.g. auto, or ray://HEAD:10001); default: "
@@ -306,5 +228,5 @@ def build_parser() -> argparse.ArgumentParser:
     dm.add_argument("--out", default="out/demo", help="output folder")
     dm.add_argument("--scene", help="MJCF scene file (default: the shipped led_link.xml)")
     dm.add_argument("--no-video", action="store_true", help="skip the rendered video")
-    _add_vehicle_args(dm)
+    add_vehicle_args(dm)
     return p

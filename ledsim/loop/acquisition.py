@@ -96,13 +96,14 @@ class AcquisitionScan:
         self.active = False
         self.samples: deque = deque(maxlen=self.n_window)  # (powers [W], encoder [rad])
 
-    def start(self, q_centre: float, q_now: float) -> None:
-        """Begin scanning around encoder angle ``q_centre`` [rad] from ``q_now``."""
+    def start(self, q_centre: float, q_now: float, dwell: float | None = None) -> None:
+        """Begin scanning around encoder angle ``q_centre`` [rad] from ``q_now``, first
+        going back and waiting there for ``dwell`` s (None: the scan's own)."""
         self.active = True
         self.centre = q_centre
         self.q_ref = q_now
         self.half_width = self.widen
-        self.elapsed = 0.0
+        self.elapsed = 0.0 if dwell is None else self.dwell - dwell
         self.held = 0.0
         self.direction = 1.0 if q_now <= q_centre else -1.0
 

@@ -25,6 +25,7 @@ from observer.noise import MeasurementNoise
 from observer.oracle import Oracle
 from observer.recording import RecordingEstimator
 
+from ..control import intensity_maximum
 from ..optics import peak_power
 from ..physics.disturbances import parse_disturbance
 from ..physics.sensor import SensorReading
@@ -44,6 +45,7 @@ from .estimation import (  # noqa: F401 (re-exported)
 from .gate import DropoutGate
 from .given import GivenRecord
 from .outcome import Navigation, RunOutcome, Trace, achievable_power, outcome  # noqa: F401
+from .slew import TimeOptimalSlew
 from .start import Surroundings, start_world  # noqa: F401 (re-exported)
 from .supervisor import LinkSupervisor
 
@@ -60,7 +62,8 @@ def make_supervisor(cfg: RunConfig, system: GimbalSystem, estimator, estimator_s
     return LinkSupervisor(estimator, system.constants, system.inertia,
                           warmup=cfg.scenario_spec.warmup, reacquire=reacquire,
                           gain_ratio=prior, noise_ratio=noise.scale / prior / carried,
-                          dead_reckon=cfg.imu)
+                          dead_reckon=cfg.imu,
+                          fast=system.config.torque_limit if cfg.fast_acquisition else None)
 
 
 def run_supervisor(cfg: RunConfig, system: GimbalSystem, model, seed: int,
@@ -72,7 +75,10 @@ def run_supervisor(cfg: RunConfig, system: GimbalSystem, model, seed: int,
     keeps every call it is given (:class:`~observer.recording.RecordingEstimator`);
     ``noise``: the run's measurement noise (None: :func:`run_noise`)."""
     if cfg.estimator == "oracle":
-        return Unsupervised(Oracle(system, truth))
+        if not (reacquire and cfg.fast_acquisition):
+            return Unsupervised(Oracle(system, truth))
+        slew = TimeOptimalSlew(system.inertia, system.config.torque_limit, system.Te)
+        return Unsupervised(Oracle(system, truth), slew, intensity_maximum(system.constants))
     noise = run_noise(cfg, system) if noise is None else noise
     est, est_system = loop_estimator(cfg, system, model, noise)
     if record:

@@ -1,14 +1,5 @@
-"""What a closed-loop run in MuJoCo is: its scenarios and its configuration.
-
-==================  ==========================================================
-scenario            what happens
-==================  ==========================================================
-align               start misaligned (phi0 = 0.3 rad); cascade PI control to the peak
-open-loop           start at phi0 = 0.3 rad; no input
-if1, if2            start aligned; the paper's input functions as u [rad/s^2]
-paper-closed-loop   start at 0.2 rad; the paper's u = -0.001 phidot_hat
-==================  ==========================================================
-"""
+"""What a closed-loop run in MuJoCo is: its configuration, in four parts (the scenarios
+and the other choices are in :mod:`ledsim.loop.registry`)."""
 
 from __future__ import annotations
 
@@ -16,40 +7,21 @@ import math
 from dataclasses import asdict, dataclass, fields, replace
 
 from ..config import PAPER_DISTANCE, LinkConstants, NavigationNoise
-from ..control import AlignmentPID, Excitation, PaperRateDamping
 from ..errors import LedsimError
-from ..estimators import ESTIMATORS
 from ..keyvalues import settings_of
 from ..physics.disturbances import check_timing, parse_disturbance
 from ..physics.scene import WorldConfig
 from ..physics.vehicle import StationKeeping
 from ..scenario import Scenario
-
-PHYSICS_SCENARIOS = {
-    s.name: s for s in (
-        Scenario("align", (0.3, 0.0), AlignmentPID(), 10.0, 5.0, warmup=1.0,
-                 description="start 0.3 rad off; cascade PI control to the intensity peak"),
-        Scenario("open-loop", (0.3, 0.0), Excitation(), 10.0, 5.0,
-                 description="start 0.3 rad off; no input"),
-        Scenario("if1", (0.0, 0.0), Excitation(cos_amp=0.1), 10.0, 5.0,
-                 description="start aligned; u = 0.1 cos(5 t)"),
-        Scenario("if2", (0.0, 0.0), Excitation(cos_amp=0.1, sin_amp=0.2), 10.0, 5.0,
-                 description="start aligned; u = 0.1 cos(5 t) + 0.2 sin(5 t)"),
-        Scenario("paper-closed-loop", (0.2, 0.0), PaperRateDamping(), 10.0, 5.0,
-                 description="start 0.2 rad off; u = -0.001 phidot_hat"),
-    )
-}
-#: Estimators of the MuJoCo loop (``kkl-paper`` and ``kkl-handover`` exist for the
-#: closed-form model only).
-LOOP_ESTIMATORS = tuple(n for n in ESTIMATORS if n not in ("kkl-paper", "kkl-handover"))
-#: The loop's estimators each once, as tables and ``ledsim demo`` compare them
-#: (``kkl-scheduled`` is what ``kkl`` runs under supervision).
-COMPARED_ESTIMATORS = tuple(n for n in LOOP_ESTIMATORS if n != "kkl-scheduled")
-OMEGA_MODELS = ("identified", "simulator", "none")
-FILTER_DISTANCES = ("configured", "nominal")
-#: Largest |initial angle| [rad] a run may start at: the LED must stay in front of the
-#: photodiodes (|phi| < pi/2 with the photodiodes' offset to spare).
-MAX_INITIAL_ANGLE = 1.4
+from .registry import (  # noqa: F401 (re-exported: the names of the loop's choices)
+    ACQUISITIONS,
+    COMPARED_ESTIMATORS,
+    FILTER_DISTANCES,
+    LOOP_ESTIMATORS,
+    MAX_INITIAL_ANGLE,
+    OMEGA_MODELS,
+    PHYSICS_SCENARIOS,
+)
 
 
 def navigation_noise(settings: tuple[str, ...]) -> NavigationNoise:
@@ -121,6 +93,12 @@ class TaskPart:
         seconds: length of a run [s] (None: the scenario's).
         supervision: watch the estimate, flag a lost link and reacquire it with a scan
             (:mod:`ledsim.loop.supervisor`); off: the estimator alone drives the motor.
+        acquisition: how the link is acquired, at the start and after a loss:
+            ``warm-up`` holds the gimbal for the scenario's warm-up while the estimator
+            converges, then slews under the control law at its rate limit, and scans
+            for a lost beam; ``minimum-time`` fixes the beam from the pair of powers and
+            slews there at the torque limit, carried on the encoder, with no warm-up
+            (:mod:`ledsim.loop.slew`; supervised runs).
         initial_angle: the true incidence angle phi at the start [rad], at rest (None:
             the scenario's); |phi| <= :data:`MAX_INITIAL_ANGLE`. Beyond about 0.6 rad the
             LED is outside the receiver's field of view.
@@ -131,6 +109,7 @@ class TaskPart:
     seconds: float | None = None
     supervision: bool = True
     initial_angle: float | None = None
+    acquisition: str = "warm-up"
 
 
 @dataclass(frozen=True)
@@ -218,6 +197,7 @@ class RunConfig:
     station_keeping_gains: tuple[str, ...] = WorldPart.station_keeping_gains
     window: float | None = ExecutionPart.window
     initial_angle: float | None = TaskPart.initial_angle
+    acquisition: str = TaskPart.acquisition
 
     @classmethod
     def of(cls, world: WorldPart = WorldPart(), task: TaskPart = TaskPart(),
@@ -237,7 +217,8 @@ class RunConfig:
                                       ("estimator", self.estimator, LOOP_ESTIMATORS),
                                       ("--omega-model", self.omega_model, OMEGA_MODELS),
                                       ("--filter-distance", self.filter_distance,
-                                       FILTER_DISTANCES)):
+                                       FILTER_DISTANCES),
+                                      ("--acquisition", self.acquisition, ACQUISITIONS)):
             if value not in registry:
                 raise LedsimError(f"unknown {flag.lstrip('-')} {value!r}: choose one of "
                                   f"{', '.join(registry)}")
@@ -274,11 +255,21 @@ class RunConfig:
 
     @property
     def scenario_spec(self) -> Scenario:
-        """The scenario, started at ``initial_angle`` (at rest) when one is set."""
+        """The scenario, started at ``initial_angle`` (at rest) when one is set, and
+        without a warm-up under the ``minimum-time`` acquisition."""
         spec = PHYSICS_SCENARIOS[self.scenario]
-        if self.initial_angle is None:
-            return spec
-        return replace(spec, x0=(float(self.initial_angle), 0.0))
+        if self.initial_angle is not None:
+            spec = replace(spec, x0=(float(self.initial_angle), 0.0))
+        if self.fast_acquisition:
+            spec = replace(spec, warmup=0.0)
+        return spec
+
+    @property
+    def fast_acquisition(self) -> bool:
+        """The ``minimum-time`` acquisition runs: asked for, supervised, and the
+        scenario's law tracks the beam."""
+        return (self.acquisition == "minimum-time" and self.supervision
+                and PHYSICS_SCENARIOS[self.scenario].law.tracks_beam)
 
     @property
     def steady_from(self) -> float:

@@ -21,9 +21,16 @@ from observer.occlusion import EncoderCarry
 from observer.supervision import GainTracker, ResidualMonitor
 
 from ..config import LinkConstants
+from ..control import intensity_maximum
 from ..optics import layout_power, pair_shape_inverse
 from ..step import Decision
 from .acquisition import AcquisitionScan
+from .slew import FastAcquisition
+
+#: The scan of a fast acquisition: it only has to bring the beam into view, so it sweeps
+#: at 2 rad/s and widens by most of the field of view each half sweep (the fix takes
+#: over within a few samples of light).
+FAST_SCAN = {"speed": 2.0, "widen": 0.4}
 
 
 def model_gain(model, constants: LinkConstants) -> float:
@@ -62,11 +69,15 @@ class LinkSupervisor:
             of sight's frame carries the estimate, and the estimator restarts from it
             when the light returns (:class:`~observer.occlusion.EncoderCarry`; for runs
             whose encoder angle is in that frame: the IMU's).
+        fast: acquire at the torque limit (:class:`~ledsim.loop.slew.FastAcquisition`)
+            at the start and after every loss, scanning only while the beam is out of
+            view; its torque limit [N m] (None: the scan alone, after ``warmup``).
     """
 
     def __init__(self, estimator: Estimator, constants: LinkConstants, inertia: float,
                  warmup: float = 0.0, reacquire: bool = True, gain_ratio: float = 1.0,
-                 noise_ratio: float = 1.0, dead_reckon: bool = False):
+                 noise_ratio: float = 1.0, dead_reckon: bool = False,
+                 fast: float | None = None):
         self.estimator = estimator
         model = estimator.system
         self.monitor = ResidualMonitor(model, noise_ratio=noise_ratio)
@@ -74,7 +85,11 @@ class LinkSupervisor:
         estimator.adapt_noise(noise_ratio)
         self.gain = GainTracker(model, lambda y: pair_shape_inverse(y, constants),
                                 model_gain(model, constants), ratio=gain_ratio)
-        self.scan = AcquisitionScan(constants, inertia)
+        self.fast = None
+        if fast is not None and reacquire:
+            self.fast = FastAcquisition(constants, inertia, fast, intensity_maximum(constants))
+        self.scan = AcquisitionScan(constants, inertia,
+                                    **({} if self.fast is None else FAST_SCAN))
         self.warmup = warmup
         self.reacquire = reacquire
         # Encoder angles of the last trusted steps: a loss is flagged up to about 0.2 s
@@ -82,6 +97,7 @@ class LinkSupervisor:
         self.trusted_q: deque = deque(maxlen=max(1, int(round(0.3 / constants.Te))))
         self.carry = EncoderCarry(constants.Te, DEAD_RECKON_AFTER) if dead_reckon else None
         self._angle = constants.layout.angle
+        self._started = False
 
     @property
     def gain_ratio(self) -> float:
@@ -106,6 +122,11 @@ class LinkSupervisor:
         xhat = est.update(y_model)
         if self.carry is not None:
             xhat = self.carry.step(est, xhat, y, y_model, q, qdot)
+        if self.fast is not None and not self._started:  # the run's start
+            self._started = True
+            self.fast.start(q)
+        if self.fast is not None and self.fast.active:
+            return self._acquire(y, q, qdot, xhat)
         lost = self.monitor.update(y_model, xhat)
         blind = not np.isfinite(y).any()
         turned = blind and bool(self.trusted_q) and \
@@ -129,6 +150,9 @@ class LinkSupervisor:
         reason = "turned off the beam while blind" if turned else self.monitor.reason
         if not self.reacquire:
             return Decision(xhat, True, reason=reason)
+        if self.fast is not None:
+            self.fast.start(q)
+            return self._acquire(y, q, qdot, xhat)
         # Lost: re-seed from the last samples if they show the beam (no need to move),
         # else scan until they do.
         noise = float(np.mean(self.monitor.noise_std)) * self.gain.ratio
@@ -146,3 +170,29 @@ class LinkSupervisor:
         if not scan.active:
             scan.start(self.trusted_q[0] if self.trusted_q else q, q)
         return Decision(xhat, True, True, scan.torque(q, qdot, noise), reason="acquiring")
+
+    def _acquire(self, y, q: float, qdot: float, xhat) -> Decision:
+        """A step of the fast acquisition: hold, slew or scan, and the re-seed on arrival."""
+        est, scan, fast = self.estimator, self.scan, self.fast
+        noise = float(np.mean(self.monitor.noise_std)) * self.gain.ratio
+        scan.record(y, q)
+        torque, seed = fast.step(y, q, qdot, noise)
+        if seed is not None:
+            scan.stop()
+            if fast.fix.gain is not None and fast.fix.gain > 0:
+                self.gain.set(fast.fix.gain / self.gain.model_gain)
+            est.reset(np.array(seed))
+            xhat = est.update(self.gain.normalize(y))
+            self.monitor.reset()
+            self.trusted_q.clear()
+            self.trusted_q.append(q)
+            return Decision(xhat, True, reseeded=True, reason="acquired")
+        if torque is None:  # the beam is out of view: scan for it
+            if not scan.active:  # around the last trusted angle, else the gimbal's centre
+                scan.start(self.trusted_q[0] if self.trusted_q else 0.0, q,
+                           dwell=None if self.trusted_q else 0.0)
+            fast.q_hold = q
+            torque = scan.torque(q, qdot, noise)
+        else:
+            scan.stop()
+        return Decision(xhat, True, True, torque, reason="acquiring")

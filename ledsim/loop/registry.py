@@ -1,0 +1,44 @@
+"""The closed loop's registries: its scenarios, estimators and choices.
+
+==================  ==========================================================
+scenario            what happens
+==================  ==========================================================
+align               start misaligned (phi0 = 0.3 rad); cascade PI control to the peak
+open-loop           start at phi0 = 0.3 rad; no input
+if1, if2            start aligned; the paper's input functions as u [rad/s^2]
+paper-closed-loop   start at 0.2 rad; the paper's u = -0.001 phidot_hat
+==================  ==========================================================
+"""
+
+from __future__ import annotations
+
+from ..control import AlignmentPID, Excitation, PaperRateDamping
+from ..estimators import ESTIMATORS
+from ..scenario import Scenario
+
+PHYSICS_SCENARIOS = {
+    s.name: s for s in (
+        Scenario("align", (0.3, 0.0), AlignmentPID(), 10.0, 5.0, warmup=1.0,
+                 description="start 0.3 rad off; cascade PI control to the intensity peak"),
+        Scenario("open-loop", (0.3, 0.0), Excitation(), 10.0, 5.0,
+                 description="start 0.3 rad off; no input"),
+        Scenario("if1", (0.0, 0.0), Excitation(cos_amp=0.1), 10.0, 5.0,
+                 description="start aligned; u = 0.1 cos(5 t)"),
+        Scenario("if2", (0.0, 0.0), Excitation(cos_amp=0.1, sin_amp=0.2), 10.0, 5.0,
+                 description="start aligned; u = 0.1 cos(5 t) + 0.2 sin(5 t)"),
+        Scenario("paper-closed-loop", (0.2, 0.0), PaperRateDamping(), 10.0, 5.0,
+                 description="start 0.2 rad off; u = -0.001 phidot_hat"),
+    )
+}
+#: Estimators of the MuJoCo loop (``kkl-paper`` and ``kkl-handover`` exist for the
+#: closed-form model only).
+LOOP_ESTIMATORS = tuple(n for n in ESTIMATORS if n not in ("kkl-paper", "kkl-handover"))
+#: The loop's estimators each once, as tables and ``ledsim demo`` compare them
+#: (``kkl-scheduled`` is what ``kkl`` runs under supervision).
+COMPARED_ESTIMATORS = tuple(n for n in LOOP_ESTIMATORS if n != "kkl-scheduled")
+OMEGA_MODELS = ("identified", "simulator", "none")
+FILTER_DISTANCES = ("configured", "nominal")
+ACQUISITIONS = ("warm-up", "minimum-time")
+#: Largest |initial angle| [rad] a run may start at: the LED must stay in front of the
+#: photodiodes (|phi| < pi/2 with the photodiodes' offset to spare).
+MAX_INITIAL_ANGLE = 1.4

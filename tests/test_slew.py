@@ -1,0 +1,89 @@
+"""Acquisition at the torque limit: the beam fixed from the pair of powers, a
+near-minimum-time slew on the encoder, and the hand-over to tracking."""
+
+import math
+
+import numpy as np
+import pytest
+from conftest import assert_user_error, run_cli
+
+from ledsim.config import LinkConstants
+from ledsim.control import intensity_maximum
+from ledsim.loop.closed_loop import run_once
+from ledsim.loop.config import RunConfig
+from ledsim.loop.slew import BeamFix, TimeOptimalSlew
+from ledsim.optics import layout_power
+
+C = LinkConstants()
+INERTIA, LIMIT = 2.09e-4, 0.05  # the shipped gimbal's [kg m^2], [N m]
+
+
+def slew_on_an_inertia(target: float, steps: int = 40, substeps: int = 5):
+    """Encoder angle and rate of a pure inertia under the slew, at 100 Hz (torque held
+    over each control period, integrated in ``substeps``)."""
+    slew = TimeOptimalSlew(INERTIA, LIMIT, C.Te)
+    q, v, path = 0.0, 0.0, []
+    for _ in range(steps):
+        tau = slew.torque(q, v, target)
+        assert abs(tau) <= LIMIT
+        h = C.Te / substeps
+        for _ in range(substeps):
+            v += tau / INERTIA * h
+            q += v * h
+        path.append((q, v))
+    return np.array(path)
+
+
+@pytest.mark.parametrize("target", [0.3, -0.45, 0.05])
+def test_the_slew_is_near_minimum_time_without_overshoot(target):
+    path = slew_on_an_inertia(target)
+    bound = 2 * math.sqrt(abs(target) / (LIMIT / INERTIA))  # bang-bang [s]
+    arrived = np.flatnonzero(np.abs(path[:, 0] - target) < 0.005)[0]
+    assert (arrived + 1) * C.Te <= bound + 0.06
+    assert np.max(np.sign(target) * (path[:, 0] - target)) < 0.005  # no overshoot
+    assert abs(path[-1, 0] - target) < 1e-3 and abs(path[-1, 1]) < 0.05
+
+
+def test_the_fix_finds_the_beam_from_noisy_pairs_and_ignores_darkness():
+    phi_ref = intensity_maximum(C)
+    fix = BeamFix(C, phi_ref)
+    rng = np.random.default_rng(0)
+    sigma = C.measurement_noise_std
+    assert not fix.add([0.01, -0.02], 0.0, sigma)  # in the noise
+    assert not fix.add([np.nan, 0.5], 0.0, sigma)  # gated out
+    assert fix.target is None and fix.stderr == math.inf
+    # The gimbal moves; the beam stays: phi_k = phi_home - q_k with phi_home = 0.3.
+    for q in np.linspace(0.0, 0.25, 20):
+        y = layout_power(0.9, 0.3 - q, C) + sigma * rng.standard_normal(2)
+        assert fix.add(y, q, sigma)
+    assert fix.stderr < 0.01
+    assert abs(fix.target - (0.3 - phi_ref)) < 4 * fix.stderr
+    assert fix.gain == pytest.approx(0.9, rel=0.05)
+
+
+def test_minimum_time_acquisition_aligns_in_a_fraction_of_a_second():
+    kkl = run_once(RunConfig(acquisition="minimum-time", seconds=2.0), 0).metrics
+    assert kkl.alignment_time is not None and kkl.alignment_time < 0.25
+    assert kkl.silent_error_share == 0.0
+    warm = run_once(RunConfig(seconds=2.0), 0).metrics
+    assert warm.alignment_time is None or warm.alignment_time > 1.0  # the warm-up's 1 s
+    oracle = run_once(RunConfig(estimator="oracle", acquisition="minimum-time",
+                                seconds=2.0), 0).metrics
+    assert oracle.alignment_time < 0.15
+
+
+def test_a_kicked_gimbal_is_back_within_a_quarter_second():
+    m = run_once(RunConfig(acquisition="minimum-time", seconds=3.0,
+                           disturbances=("kick:start=1.5,rate=12",)), 1).metrics
+    assert m.recovery_time is not None and m.recovery_time < 0.25
+
+
+def test_out_of_view_the_scan_finds_the_beam():
+    m = run_once(RunConfig(acquisition="minimum-time", seconds=3.0, initial_angle=1.0),
+                 0).metrics
+    assert m.alignment_time is not None and m.alignment_time < 1.5
+
+
+def test_a_bad_acquisition_is_refused_in_one_line(tmp_path):
+    assert_user_error(run_cli("run", "--acquisition", "instant", "--out",
+                              str(tmp_path / "o")), "instant")
