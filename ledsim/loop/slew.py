@@ -39,17 +39,24 @@ class BeamFix:
             deviations above zero [-].
         max_phi: samples whose inverted |phi| exceeds this are left out [rad] (far in the
             tail the log-ratio is dominated by the shoulder's model error).
+        memory: samples older than this are forgotten [s]: they may no longer hold (a
+            drifting transmitter, a hull turning without the IMU).
+        agree_sigmas: a sample further than this many standard deviations from the
+            others' fix starts the fix afresh (the beam moved, or the older samples were
+            a partly shaded pair, whose shape lies about phi) [-].
     """
 
     def __init__(self, constants: LinkConstants, phi_ref: float, detect_sigmas: float = 4.0,
-                 max_phi: float = 0.8, memory: float = 0.3):
+                 max_phi: float = 0.8, memory: float = 0.3, agree_sigmas: float = 4.0):
         self.c = constants
         self.phi_ref = phi_ref
         self.detect_sigmas = detect_sigmas
         self.max_phi = max_phi
-        # (weight [1/rad^2], target encoder angle [rad], gain [W]) of the recent samples:
-        # older ones may no longer hold (a drifting transmitter, a hull without the IMU).
-        self._samples: deque = deque(maxlen=max(1, int(round(memory / constants.Te))))
+        self.memory_steps = max(1, int(round(memory / constants.Te)))
+        self.agree_sigmas = agree_sigmas
+        # (step, weight [1/rad^2], target encoder angle [rad], gain [W]) of each sample.
+        self._samples: deque = deque()
+        self._step = 0
 
     def clear(self) -> None:
         self._samples.clear()
@@ -60,7 +67,11 @@ class BeamFix:
 
     def add(self, y, q: float, noise_std: float) -> bool:
         """Take the powers ``y`` [W] measured at encoder angle ``q`` [rad] with noise
-        ``noise_std`` [W]; True when the sample was usable."""
+        ``noise_std`` [W] (one call a control step, usable or not); True when the sample
+        was usable."""
+        self._step += 1
+        while self._samples and self._step - self._samples[0][0] > self.memory_steps:
+            self._samples.popleft()
         powers = [float(v) for v in y]
         bar = self.detect_sigmas * noise_std
         if not all(p > bar for p in powers):  # dark, gated out (NaN) or in the noise
@@ -71,7 +82,11 @@ class BeamFix:
         var = self.phi_variance(phi, powers, noise_std)
         if not var > 0 or not math.isfinite(var):
             return False
-        self._samples.append((1.0 / var, q + phi - self.phi_ref, gain))
+        target = q + phi - self.phi_ref
+        if self._samples and abs(target - self.target) > self.agree_sigmas * math.sqrt(
+                var + self.stderr**2):
+            self._samples.clear()
+        self._samples.append((self._step, 1.0 / var, target, gain))
         return True
 
     def phi_variance(self, phi: float, powers, noise_std: float) -> float:
@@ -89,21 +104,21 @@ class BeamFix:
     @property
     def target(self) -> float | None:
         """Encoder angle [rad] at which phi is the alignment target (None: no sample)."""
-        w = sum(s[0] for s in self._samples)
-        return sum(s[0] * s[1] for s in self._samples) / w if w > 0 else None
+        w = sum(s[1] for s in self._samples)
+        return sum(s[1] * s[2] for s in self._samples) / w if w > 0 else None
 
     @property
     def stderr(self) -> float:
         """Standard error of :attr:`target` [rad] (inf: no sample)."""
-        w = sum(s[0] for s in self._samples)
+        w = sum(s[1] for s in self._samples)
         return 1.0 / math.sqrt(w) if w > 0 else math.inf
 
     @property
     def gain(self) -> float | None:
         """The transmitter gain the samples saw [W], weighted as the target (None: no
         sample)."""
-        w = sum(s[0] for s in self._samples)
-        return sum(s[0] * s[2] for s in self._samples) / w if w > 0 else None
+        w = sum(s[1] for s in self._samples)
+        return sum(s[1] * s[3] for s in self._samples) / w if w > 0 else None
 
 
 class TimeOptimalSlew:
@@ -170,12 +185,13 @@ class FastAcquisition:
         arrive_tol [rad], arrive_rate [rad/s]: what counts as arrived.
         dark_time: time without a usable sample after which the beam is out of view [s].
         creep_rate: the speed towards a fix not yet good enough to slew to [rad/s].
+        min_samples: samples the fix needs before the gimbal moves on it [-].
     """
 
     def __init__(self, constants: LinkConstants, inertia: float, limit: float,
                  phi_ref: float, go_stderr: float = 0.03, arrive_stderr: float = 0.006,
                  arrive_tol: float = 0.005, arrive_rate: float = 0.3,
-                 dark_time: float = 0.05, creep_rate: float = 1.0):
+                 dark_time: float = 0.05, creep_rate: float = 1.0, min_samples: int = 3):
         self.fix = BeamFix(constants, phi_ref)
         self.slew = TimeOptimalSlew(inertia, limit, constants.Te)
         self.phi_ref = phi_ref
@@ -184,6 +200,7 @@ class FastAcquisition:
         self.Te = constants.Te
         self.dark_steps = max(1, int(round(dark_time / constants.Te)))
         self.creep_rate = creep_rate
+        self.min_samples = min_samples
         self.active = False
 
     def start(self, q: float) -> None:
@@ -210,7 +227,9 @@ class FastAcquisition:
         seen = self.fix.add(y, q, noise_std)
         self.dark = 0 if seen else self.dark + 1
         target, err = self.fix.target, self.fix.stderr
-        if target is None:
+        if target is None:  # every sample forgotten: start over
+            self.moving = False
+        if target is None or (not self.moving and self.fix.samples < self.min_samples):
             if self.out_of_view:
                 return None, None
             return self.slew.torque(q, qdot, self.q_hold), None
