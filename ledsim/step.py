@@ -73,17 +73,21 @@ class Unsupervised:
 
     With ``slew`` (a :class:`~ledsim.loop.slew.TimeOptimalSlew`), the run starts by
     slewing the encoder to where the estimate puts the alignment target ``phi_ref``
-    [rad] (the oracle's minimum-time acquisition: its estimate is the truth), and hands
+    [rad] (the oracle's minimum-time acquisition: its estimate is the truth), hands
     over to the control law on arrival (within ``arrive_tol`` [rad], under
-    ``arrive_rate`` [rad/s]).
+    ``arrive_rate`` [rad/s]), and slews again whenever the estimate is more than
+    ``reslew`` [rad] off the target (a kick, a hull strike).
     """
 
     def __init__(self, estimator, slew=None, phi_ref: float = 0.0,
-                 arrive_tol: float = 0.005, arrive_rate: float = 0.3):
+                 arrive_tol: float = 0.005, arrive_rate: float = 0.3,
+                 reslew: float = 0.1):
         self.estimator = estimator
         self.slew = slew
         self.phi_ref = phi_ref
         self.arrive_tol, self.arrive_rate = arrive_tol, arrive_rate
+        self.reslew = reslew
+        self.slewing = slew is not None
 
     #: The powers reach the estimator as they are (a link supervisor rescales them).
     gain_ratio = 1.0
@@ -94,8 +98,12 @@ class Unsupervised:
             return Decision(xhat, False)
         phi, phidot = xhat  # the one axis's angle and rate
         error = float(phi) - self.phi_ref  # phi = phi_home - q: the encoder's way to go
+        if not self.slewing:
+            if abs(error) <= self.reslew:
+                return Decision(xhat, False)
+            self.slewing = True
         if abs(error) < self.arrive_tol and abs(float(phidot)) < self.arrive_rate:
-            self.slew = None
+            self.slewing = False
             return Decision(xhat, False, reseeded=True, reason="acquired")
         return Decision(xhat, False, True, self.slew.torque(q, qdot, q + error),
                         reason="acquiring")

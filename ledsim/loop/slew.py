@@ -24,6 +24,7 @@ from __future__ import annotations
 
 import math
 from collections import deque
+from dataclasses import dataclass
 
 from ..config import LinkConstants
 from ..optics import pair_shape_inverse, response_slope, response_terms
@@ -141,8 +142,8 @@ class TimeOptimalSlew:
         settle: share of the remaining error closed per step near the target [-].
     """
 
-    def __init__(self, inertia: float, limit: float, Te: float, alpha: float = 0.8,
-                 settle: float = 0.5):
+    def __init__(self, inertia: float, limit: float, Te: float, alpha: float = 0.9,
+                 settle: float = 0.7):
         self.inertia = inertia
         self.limit = limit
         self.Te = Te
@@ -165,6 +166,20 @@ class TimeOptimalSlew:
         want = min(max(want, -max_rate), max_rate)
         tau = self.inertia * (want - qdot) / self.Te
         return min(max(tau, -self.limit), self.limit)
+
+
+@dataclass
+class AcquisitionLog:
+    """When one acquisition's stages ended, in control steps from its start (1: the
+    first step; None: not reached): the first usable sample (the pair's inversion),
+    the fix good enough to go, the slew at the fix's target, and the arrival (the
+    hand-over to the estimator, once the fix is good enough for it)."""
+
+    steps: int = 0
+    first_seen: int | None = None
+    go: int | None = None
+    reached: int | None = None
+    arrived: int | None = None
 
 
 class FastAcquisition:
@@ -202,6 +217,8 @@ class FastAcquisition:
         self.creep_rate = creep_rate
         self.min_samples = min_samples
         self.active = False
+        #: One :class:`AcquisitionLog` per acquisition, in order.
+        self.log: list[AcquisitionLog] = []
 
     def start(self, q: float) -> None:
         """Begin acquiring, the gimbal at encoder angle ``q`` [rad]."""
@@ -210,6 +227,7 @@ class FastAcquisition:
         self.q_hold = q
         self.dark = 0
         self.moving = False
+        self.log.append(AcquisitionLog())
 
     def stop(self) -> None:
         self.active = False
@@ -226,6 +244,10 @@ class FastAcquisition:
         restart the estimator from on arrival (None: not yet)."""
         seen = self.fix.add(y, q, noise_std)
         self.dark = 0 if seen else self.dark + 1
+        log = self.log[-1]
+        log.steps += 1
+        if seen and log.first_seen is None:
+            log.first_seen = log.steps
         target, err = self.fix.target, self.fix.stderr
         if target is None:  # every sample forgotten: start over
             self.moving = False
@@ -237,9 +259,14 @@ class FastAcquisition:
             # Some evidence, not enough to go: creep towards it, where the light is
             # brighter and each sample tells more.
             return self.slew.torque(q, qdot, target, self.creep_rate), None
+        if not self.moving:
+            log.go = log.steps
         self.moving = True
-        if (abs(target - q) < self.arrive_tol and abs(qdot) < self.arrive_rate
-                and err < self.arrive_stderr):
+        there = abs(target - q) < self.arrive_tol and abs(qdot) < self.arrive_rate
+        if there and log.reached is None:
+            log.reached = log.steps
+        if there and err < self.arrive_stderr:
             self.active = False
+            log.arrived = log.steps
             return None, (self.phi_ref + (target - q), -qdot)
         return self.slew.torque(q, qdot, target), None

@@ -29,8 +29,9 @@ from .slew import FastAcquisition
 
 #: The scan of a fast acquisition: it only has to bring the beam into view, so it sweeps
 #: at 2 rad/s and widens by most of the field of view each half sweep (the fix takes
-#: over within a few samples of light).
-FAST_SCAN = {"speed": 2.0, "widen": 0.4}
+#: over within a few samples of light). It first waits 2 s where the beam was: a
+#: gimbal that did not turn while blind was occluded, and finds the beam where it was.
+FAST_SCAN = {"speed": 2.0, "widen": 0.4, "dwell": 2.0}
 
 
 def model_gain(model, constants: LinkConstants) -> float:
