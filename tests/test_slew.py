@@ -87,3 +87,27 @@ def test_out_of_view_the_scan_finds_the_beam():
 def test_a_bad_acquisition_is_refused_in_one_line(tmp_path):
     assert_user_error(run_cli("run", "--acquisition", "instant", "--out",
                               str(tmp_path / "o")), "instant")
+
+
+def test_the_envs_shipped_policy_takes_the_acquisition():
+    import gymnasium as gym
+
+    import ledsim.envs  # noqa: F401
+    from ledsim.envs import ShippedAlignmentPolicy
+
+    shares = {}
+    for acq in ("warm-up", "minimum-time"):
+        env = gym.make("ledsim/LinkAlign-v0", scenario="align", acquisition=acq,
+                       max_episode_steps=200)
+        try:
+            policy = ShippedAlignmentPolicy(env.unwrapped, "kkl")
+            obs, _ = env.reset(seed=100)
+            rewards, done = [], False
+            while not done:
+                obs, r, term, trunc, _ = env.step(policy(obs))
+                rewards.append(r)
+                done = term or trunc
+        finally:
+            env.close()
+        shares[acq] = np.mean(np.array(rewards) >= 0.9)
+    assert shares["minimum-time"] > 0.9 > 0.5 > shares["warm-up"]

@@ -111,6 +111,9 @@ class LinkAlignEnv(gym.Env, EzPickle):
         imu: observe the vehicle's IMU, DVL and encoder (indices 2-6); the shipped
             policy then uses them as ``ledsim run`` does.
         station_keeping: the vehicle holds its pose on its thrusters.
+        acquisition: how the shipped policy acquires the link (``warm-up`` or
+            ``minimum-time``, as ``ledsim run --acquisition``); the env's own dynamics
+            do not depend on it.
     """
 
     metadata = {"render_modes": ["rgb_array"], "render_fps": 100}
@@ -123,12 +126,13 @@ class LinkAlignEnv(gym.Env, EzPickle):
                  height: int = 480, camera: str = "side",
                  integrator: str = WorldPart.integrator, scene: str | None = None,
                  imu: bool = EstimatorPart.imu,
-                 station_keeping: bool = WorldPart.station_keeping):
+                 station_keeping: bool = WorldPart.station_keeping,
+                 acquisition: str = TaskPart.acquisition):
         # Pickles as its constructor arguments (MuJoCo's model does not pickle), as
         # Gymnasium's MuJoCo environments do: the copy is a new environment.
         EzPickle.__init__(self, scenario, distance, noise_scale, disturbances, torque_limit,
                           frame_skip, phi0_range, render_mode, width, height, camera,
-                          integrator, scene, imu, station_keeping)
+                          integrator, scene, imu, station_keeping, acquisition)
         if render_mode not in (None, "rgb_array"):
             raise ValueError(f"render_mode={render_mode!r}: use None or 'rgb_array'")
         if int(frame_skip) < 1:
@@ -138,7 +142,8 @@ class LinkAlignEnv(gym.Env, EzPickle):
         self.cfg = RunConfig.of(
             WorldPart(distance, torque_limit, noise_scale, scene, integrator,
                       bool(station_keeping)),
-            TaskPart(scenario=scenario or TaskPart.scenario, disturbances=tuple(disturbances)),
+            TaskPart(scenario=scenario or TaskPart.scenario, disturbances=tuple(disturbances),
+                     acquisition=acquisition),
             EstimatorPart(imu=bool(imu)))
         self.cfg.validate()
         world_config = self.cfg.world_config()
