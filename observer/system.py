@@ -77,6 +77,19 @@ class DiscreteSystem(ABC):
 
     # -- helpers shared by every system ---------------------------------------------------
 
+    def set_model(self, Te: float, domain_halfwidth, process_noise_std,
+                  noise: MeasurementNoise, output_range=(None, None)) -> None:
+        """Set the attributes every system has: the period ``Te`` [s], the training box
+        +-``domain_halfwidth``, the process noise, the measurement ``noise`` (and its
+        standard deviations) and the plausible (low, high) of each output."""
+        self.Te = Te
+        self.domain_high = np.array(domain_halfwidth, dtype=float)
+        self.domain_low = -self.domain_high
+        self.process_noise_std = np.array(process_noise_std, dtype=float)
+        self.measurement_noise = noise
+        self.measurement_noise_std = noise.std_at()
+        self.output_low, self.output_high = output_range
+
     def input_array(self, u, batch_shape: tuple[int, ...] = ()) -> np.ndarray:
         """Broadcast a scalar or array input to shape ``batch_shape + (n_input,)``."""
         u = np.asarray(u, dtype=float)

@@ -49,14 +49,9 @@ class LEDLinkModel(DiscreteSystem):
                  domain: tuple[float, float] = (0.5, 0.5)):
         self.constants = constants or LinkConstants()
         c = self.constants
-        self.Te = c.Te
-        self.domain_high = np.array(domain, dtype=float)
-        self.domain_low = -self.domain_high
-        self.process_noise_std = np.array(c.process_noise_std, dtype=float)
-        self.measurement_noise = c.measurement_noise()
-        self.measurement_noise_std = self.measurement_noise.std_at()
+        self.set_model(c.Te, domain, c.process_noise_std, c.measurement_noise(),
+                       plausible_power_range(c))
         self.cp_bar = float(transmitter_gain(c.distance, c.theta, c))
-        self.output_low, self.output_high = plausible_power_range(c)
         self._F = np.array([[1.0, c.Te], [0.0, 1.0]])
 
     def f(self, x, u=0.0):

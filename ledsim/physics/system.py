@@ -66,16 +66,12 @@ class GimbalSystem(DiscreteSystem):
         self.sensor = IrradianceSensor(self.world, noise=False)
         c = self.config.constants
         self.constants = c
-        self.Te = c.Te
-        self.domain_high = np.array(domain, dtype=float)
-        self.domain_low = -self.domain_high
-        self.process_noise_std = np.array(c.process_noise_std, dtype=float)
-        self.measurement_noise = c.measurement_noise()
-        self.measurement_noise_std = self.measurement_noise.std_at()
-        self.output_low, self.output_high = plausible_power_range(c)
+        self.set_model(c.Te, domain, c.process_noise_std, c.measurement_noise(),
+                       plausible_power_range(c))
         self.inertia = self.world.hinge_inertia()
         self.world.reset()
-        self.phi_home = float(self.sensor.geometry()[2][0])  # phi at gimbal angle 0
+        # phi at gimbal angle 0: the reference photodiode's incidence angle
+        self.phi_home = float(self.sensor.geometry()[2][c.layout.reference])
 
     # -- the input mapping -----------------------------------------------------------
 
