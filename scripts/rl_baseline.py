@@ -2,16 +2,21 @@
 (an LSTM policy), against the shipped stack of ``ledsim run`` (KKL under supervision,
 cascade PI) and the oracle, on the same seeds and disturbances.
 
-    python scripts/rl_baseline.py [--steps 200000] [--disturbance SPEC]... [--seeds 4]
+    python scripts/rl_baseline.py [--steps 200000] [--disturbance SPEC]... [--episodes 20]
                                   --out DIR          # needs: pip install 'ledsim[rl,train]'
 
 Training episodes start from a random misalignment in +-0.3 rad (``scenario=None``);
-evaluation episodes start as seeds 100.. of ``ledsim run --scenario align`` (0.3 rad
-off). Writes ``DIR/results.json`` (per policy: ``availability``, the share of the
-steps with at least 90 % of the achievable power, as ``ledsim run`` counts it, and
-``availability_steady`` from 5 s on;
-``mean_return``, the mean episode return of the reward in [0, 1] per step;
-``train_seconds``; ``env_steps``) and ``DIR/learning_curve.png``.
+evaluation episodes are seeds 100.. of ``ledsim run --scenario align``, from each start
+of :data:`STARTS`: the scenario's 0.3 rad, and two PPO was not trained on, 1.0 rad
+(outside the field of view) and -0.45 rad (``reset(options={"initial_angle": ...})``).
+Writes ``DIR/results.json`` (per policy: ``availability``, the share of the steps with
+at least 90 % of the achievable power, as ``ledsim run`` counts it, and
+``availability_steady`` from 5 s on, ``mean_return``, the mean episode return of the
+reward in [0, 1] per step, all from 0.3 rad; ``starts``: each start's per-episode
+availabilities; ``train_seconds``; ``env_steps``), the trained policies
+(``DIR/ppo.zip``, ``DIR/recurrent_ppo.zip``) and ``DIR/learning_curve.png``. The shipped
+stack and the oracle are evaluated with both acquisitions (``warm-up``,
+``minimum-time``).
 """
 
 from __future__ import annotations
@@ -19,7 +24,9 @@ from __future__ import annotations
 import argparse
 import json
 import os
+import shutil
 import sys
+import tempfile
 import time
 from pathlib import Path
 
@@ -38,38 +45,53 @@ from ledsim.physics.disturbances import parse_disturbance  # noqa: E402
 EVAL_SEED0 = 100
 AVAILABLE = 0.9  # reward (share of the achievable power) counted as available
 STEADY_STEP = 500  # the steady window of ledsim run: from 5 s
+#: Evaluation starts: the align scenario's own (0.3 rad), and two PPO never saw.
+STARTS = {"0.3": None, "1.0": 1.0, "-0.45": -0.45}
 
 
-def make_env(disturbances, scenario=None, stack: int = 1):
+def make_env(disturbances, scenario=None, stack: int = 1, acquisition: str | None = None):
     import gymnasium as gym
     from gymnasium.wrappers import FrameStackObservation
 
-    env = gym.make("ledsim/LinkAlign-v0", scenario=scenario, disturbances=disturbances)
+    extra = {} if acquisition is None else {"acquisition": acquisition}
+    env = gym.make("ledsim/LinkAlign-v0", scenario=scenario, disturbances=disturbances,
+                   **extra)
     return FrameStackObservation(env, stack) if stack > 1 else env
 
 
-def evaluate(policy_for, disturbances, seeds: int, stack: int = 1) -> dict:
+def episode(policy_for, disturbances, seed: int, start, stack: int = 1,
+            acquisition: str | None = None) -> np.ndarray:
+    """The rewards of one align episode (seed ``seed``, from ``start`` [rad]; None: the
+    scenario's) of the policy ``policy_for(env)`` gives for the episode's env."""
+    env = make_env(disturbances, "align", stack, acquisition)
+    act = policy_for(env)
+    options = None if start is None else {"initial_angle": start}
+    obs, _ = env.reset(seed=seed, options=options)
+    rewards, done = [], False
+    while not done:
+        obs, r, term, trunc, _ = env.step(act(obs))
+        rewards.append(r)
+        done = term or trunc
+    env.close()
+    return np.array(rewards)
+
+
+def evaluate(policy_for, disturbances, seeds: int, stack: int = 1,
+             acquisition: str | None = None) -> dict:
     """``availability`` (over the episode, and ``availability_steady`` from 5 s, after
     any alignment) and ``mean_return`` over ``seeds`` episodes of the align scenario
-    (seeds 100..) of the policy ``policy_for(env)`` gives for each episode's env."""
-    avail, steady, returns = [], [], []
-    for k in range(seeds):
-        env = make_env(disturbances, "align", stack)
-        act = policy_for(env)
-        obs, _ = env.reset(seed=EVAL_SEED0 + k)
-        rewards, done = [], False
-        while not done:
-            obs, r, term, trunc, _ = env.step(act(obs))
-            rewards.append(r)
-            done = term or trunc
-        env.close()
-        rewards = np.array(rewards)
-        avail.append(float(np.mean(rewards >= AVAILABLE)))
-        steady.append(float(np.mean(rewards[STEADY_STEP:] >= AVAILABLE)))
-        returns.append(float(rewards.sum()))
-    return dict(availability=float(np.mean(avail)),
+    (seeds 100..) from 0.3 rad, and ``starts``: each start's per-episode availability."""
+    starts = {}
+    for name, start in STARTS.items():
+        runs = [episode(policy_for, disturbances, EVAL_SEED0 + k, start, stack,
+                        acquisition) for k in range(seeds)]
+        starts[name] = [float(np.mean(r >= AVAILABLE)) for r in runs]
+        if start is None:
+            steady = [float(np.mean(r[STEADY_STEP:] >= AVAILABLE)) for r in runs]
+            returns = [float(r.sum()) for r in runs]
+    return dict(availability=float(np.mean(starts["0.3"])),
                 availability_steady=float(np.mean(steady)),
-                mean_return=float(np.mean(returns)))
+                mean_return=float(np.mean(returns)), starts=starts)
 
 
 def model_policy(model, recurrent: bool):
@@ -119,7 +141,8 @@ def main() -> int:
     ap.add_argument("--steps", type=int, default=200_000, help="training steps per policy")
     ap.add_argument("--disturbance", action="append", default=[], metavar="SPEC",
                     help="ledsim run's disturbance syntax (repeatable)")
-    ap.add_argument("--seeds", type=int, default=4, help="evaluation episodes")
+    ap.add_argument("--episodes", "--seeds", dest="seeds", type=int, default=20,
+                    help="evaluation episodes per start (seeds 100..)")
     ap.add_argument("--out", required=True, help="output folder")
     ap.add_argument("--reference-only", action="store_true",
                     help="re-evaluate only the shipped stack and the oracle in the "
@@ -149,14 +172,18 @@ def main() -> int:
 
     dist = tuple(args.disturbance)
     results, curves = {}, {}
+    scratch = tempfile.mkdtemp(prefix="rl_baseline_")
     for name in ("ppo", "recurrent_ppo"):
         model, seconds, curves[name] = train(name, args.steps, dist)
         scores = evaluate(model_policy(model, name == "recurrent_ppo"), dist, args.seeds,
                           stack=8 if name == "ppo" else 1)
         results[name] = dict(**scores, train_seconds=seconds, env_steps=args.steps)
-        print(name, results[name], flush=True)
+        model.save(Path(scratch) / f"{name}.zip")  # moved in beside results.json below
+        print(name, {k: v for k, v in results[name].items() if k != "starts"}, flush=True)
     results.update(references(dist, args.seeds))
     with output_folder(out) as tmp:
+        for name in ("ppo", "recurrent_ppo"):
+            shutil.move(str(Path(scratch) / f"{name}.zip"), tmp / f"{name}.zip")
         atomic_write_text(tmp / "results.json", json.dumps(
             {"disturbances": list(dist), "steps": args.steps, "eval_seeds": args.seeds,
              **results}, indent=2) + "\n")
@@ -165,15 +192,22 @@ def main() -> int:
 
 
 def references(dist: tuple, seeds: int) -> dict:
-    """The shipped stack's and the oracle's scores as policies of the same env."""
+    """The shipped stack's and the oracle's scores as policies of the same env, with
+    the default acquisition (``shipped_kkl``, ``oracle``) and with each one named."""
     from ledsim.envs import ShippedAlignmentPolicy
+    from ledsim.loop.config import TaskPart
 
     results = {}
     for name, estimator in (("shipped_kkl", "kkl"), ("oracle", "oracle")):
-        scores = evaluate(lambda env, e=estimator: ShippedAlignmentPolicy(env.unwrapped, e),
-                          dist, seeds)
-        results[name] = dict(**scores, train_seconds=0.0, env_steps=0)
-        print(name, results[name], flush=True)
+        for acq in ("warm-up", "minimum-time"):
+            scores = evaluate(
+                lambda env, e=estimator: ShippedAlignmentPolicy(env.unwrapped, e), dist,
+                seeds, acquisition=acq)
+            row = dict(**scores, train_seconds=0.0, env_steps=0, acquisition=acq)
+            results[f"{name}_{acq.replace('-', '_')}"] = row
+            if acq == TaskPart.acquisition:
+                results[name] = row
+            print(name, acq, {k: v for k, v in row.items() if k != "starts"}, flush=True)
     return results
 
 
