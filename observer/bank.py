@@ -105,10 +105,10 @@ class ObserverBank(Estimator):
         for m in self.members:
             m.seed_run(seed)
 
-    def reset(self, x0=None) -> None:
+    def reset(self, x0=None, covariance=None) -> None:
         """Every member from ``x0``; the active one stays."""
         for m in self.members:
-            m.reset(x0)
+            m.reset(x0, covariance)
         self.xhat = None
 
     def update(self, y) -> np.ndarray:

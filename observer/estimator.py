@@ -28,8 +28,14 @@ class Estimator(ABC):
         self.system = system
 
     @abstractmethod
-    def reset(self, x0: np.ndarray | None = None) -> None:
-        """Start again from the initial guess ``x0`` (default: the domain centre)."""
+    def reset(self, x0: np.ndarray | None = None,
+              covariance: np.ndarray | None = None) -> None:
+        """Start again from the initial guess ``x0`` (default: the domain centre).
+
+        ``covariance``: how sure that guess is, shape ``(n_state, n_state)`` in the
+        state's units squared (None: the estimator's own initial uncertainty). A
+        Bayesian filter starts from it; an observer without a covariance (the KKL)
+        ignores it."""
 
     @abstractmethod
     def update(self, y: np.ndarray) -> np.ndarray:
@@ -95,9 +101,9 @@ class GaussianFilter(Estimator):
         self.lost_nis, self.lost_steps = lost_nis, lost_steps
         self.reset()
 
-    def reset(self, x0=None) -> None:
+    def reset(self, x0=None, covariance=None) -> None:
         self.x = self.initial_guess(x0)
-        self.P = self.P0.copy()
+        self.P = (self.P0 if covariance is None else np.asarray(covariance, dtype=float)).copy()
         self.inconsistent = 0  # steps in a row with an implausible innovation
 
     def diverged(self, innov: np.ndarray, S: np.ndarray) -> bool:

@@ -42,9 +42,9 @@ class HandoverKKL(Estimator):
         self.fast.seed_run(seed)
         self.slow.seed_run(seed)
 
-    def reset(self, x0=None) -> None:
-        self.fast.reset(x0)
-        self.slow.reset(x0)
+    def reset(self, x0=None, covariance=None) -> None:
+        self.fast.reset(x0, covariance)
+        self.slow.reset(x0, covariance)
         self.k = 0
 
     def update(self, y) -> np.ndarray:

@@ -157,7 +157,7 @@ class KKLObserver(Estimator):
 
     # -- Estimator interface (one trajectory) ----------------------------------------------
 
-    def reset(self, x0=None) -> None:
+    def reset(self, x0=None, covariance=None) -> None:  # no covariance to set
         self.z = self.encode(self.initial_guess(x0))
         self._y = None
         self._xhat = None

@@ -29,7 +29,7 @@ class Oracle(Estimator):
         super().__init__(system)
         self.truth = truth
 
-    def reset(self, x0=None) -> None:
+    def reset(self, x0=None, covariance=None) -> None:
         pass
 
     def update(self, y) -> np.ndarray:

@@ -14,7 +14,8 @@ key          shape     meaning
 ===========  ========  ============================================================
 call_kind    (m,)      index into :data:`CALLS`
 call_step    (m,)      the control step it came in (steps end at each ``predict``)
-call_args    (m, w)    its numbers (NaN-padded): y [W] or x0 or u or (noise, y)
+call_args    (m, w)    its numbers (NaN-padded): y [W], x0 (and its covariance,
+                       flattened), u, or (noise, y)
 call_nargs   (m,)      how many of them are arguments (a missing y is NaN too)
 call_out     (m, n)    the estimate it returned (NaN: none)
 ===========  ========  ============================================================
@@ -34,7 +35,8 @@ class CallRecord:
     """The calls an estimator received (see the module docstring)."""
 
     def __init__(self, n_state: int, n_output: int):
-        self.n_state, self.width = n_state, max(n_state, n_output + 1, 1)
+        # A reset's arguments: x0, then its covariance (flattened) when one is given.
+        self.n_state, self.width = n_state, max(n_state + n_state**2, n_output + 1, 1)
         self.kind: list[int] = []
         self.step: list[int] = []
         self.args: list[np.ndarray] = []
@@ -81,9 +83,12 @@ class RecordingEstimator(Estimator):
         self.record.add("seed_run", [seed])
         self.inner.seed_run(seed)
 
-    def reset(self, x0=None) -> None:
-        self.record.add("reset", [] if x0 is None else x0)
-        self.inner.reset(x0)
+    def reset(self, x0=None, covariance=None) -> None:
+        args = [] if x0 is None else list(np.asarray(x0, dtype=float).reshape(-1))
+        if covariance is not None:
+            args += list(np.asarray(covariance, dtype=float).reshape(-1))
+        self.record.add("reset", args)
+        self.inner.reset(x0, covariance)
 
     def update(self, y) -> np.ndarray:
         x = self.inner.update(y)
@@ -112,7 +117,9 @@ def replay_calls(estimator: Estimator, arrays: dict[str, np.ndarray]) -> float:
         if name == "seed_run":
             estimator.seed_run(int(a[0]))
         elif name == "reset":
-            estimator.reset(a if n else None)
+            ns = estimator.system.n_state
+            estimator.reset(a[:ns] if n else None,
+                            a[ns:n].reshape(ns, ns) if n > ns else None)
         elif name == "update":
             worst = max(worst, difference(estimator.update(a), out))
         elif name == "predict":

@@ -155,8 +155,8 @@ class ScheduledKKL(Estimator):
 
     # -- Estimator interface ---------------------------------------------------------
 
-    def reset(self, x0=None) -> None:
-        """Start again, fast: the schedule's clock restarts."""
+    def reset(self, x0=None, covariance=None) -> None:
+        """Start again, fast: the schedule's clock restarts (no covariance to set)."""
         self.k, self._inside, self.locked, self._off = 0, 0.0, 0.0, 1.0
         self._wide = False
         self._gain(self.clip(self.schedule.gain(0.0, self.noise)))

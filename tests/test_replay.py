@@ -40,6 +40,17 @@ def test_a_fresh_estimator_given_the_trace_gives_the_runs_estimates(tmp_path, es
     assert result.estimates >= steps and result.max_abs_difference <= 1e-9
 
 
+@pytest.mark.parametrize("estimator", ["ekf", "pf"])
+def test_a_reseed_with_its_covariance_replays(tmp_path, estimator):
+    """The minimum-time acquisition restarts a filter from the fix with the fix's own
+    covariance: the record keeps it, and the replay gives it back."""
+    path, series = _save(tmp_path, estimator=estimator, acquisition="minimum-time")
+    kinds = series["call_kind"]
+    resets = series["call_nargs"][kinds == 1]
+    assert (resets == 2 + 4).any()  # x0 and its 2x2 covariance
+    assert replay(path).max_abs_difference == 0.0
+
+
 def test_the_onnx_export_replays_to_1e_6(tmp_path):
     pytest.importorskip("onnxruntime")
     ckpt = require_shipped_checkpoint(0.085, "mujoco")  # the fixed-gain MuJoCo KKL

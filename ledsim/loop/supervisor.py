@@ -32,6 +32,9 @@ from .slew import FastAcquisition
 #: over within a few samples of light). It first waits 2 s where the beam was: a
 #: gimbal that did not turn while blind was occluded, and finds the beam where it was.
 FAST_SCAN = {"speed": 2.0, "widen": 0.4, "dwell": 2.0}
+#: Standard deviation of a fast acquisition's re-seeded phidot [rad/s]: the encoder's
+#: rate, off by the hull's own turning that the line of sight does not remove.
+SEED_RATE_STD = 0.05
 
 
 def model_gain(model, constants: LinkConstants) -> float:
@@ -182,7 +185,10 @@ class LinkSupervisor:
             scan.stop()
             if fast.fix.gain is not None and fast.fix.gain > 0:
                 self.gain.set(fast.fix.gain / self.gain.model_gain)
-            est.reset(np.array(seed))
+            # phi within three of the fix's standard errors (its spread and the pair's
+            # model error: at one, an EKF trusted a 1-deg bias for seconds); phidot is
+            # the encoder's own.
+            est.reset(np.array(seed), np.diag([(3 * fast.fix.stderr)**2, SEED_RATE_STD**2]))
             xhat = est.update(self.gain.normalize(y))
             self.monitor.reset()
             self.trusted_q.clear()

@@ -49,9 +49,10 @@ class ParticleFilter(Estimator):
     def seed_run(self, seed: int) -> None:
         self.seed = self.SEED_OFFSET + seed
 
-    def reset(self, x0=None) -> None:
+    def reset(self, x0=None, covariance=None) -> None:
         self.rng = np.random.default_rng(self.seed)
-        L = np.linalg.cholesky(self.P0)
+        L = np.linalg.cholesky(self.P0 if covariance is None else
+                               np.asarray(covariance, dtype=float))
         self.particles = self.initial_guess(x0) + self.rng.standard_normal(
             (self.n_particles, self.system.n_state)) @ L.T
         self.logw = np.zeros(self.n_particles)
