@@ -164,7 +164,8 @@ def main() -> None:
         "## Which part delivers each figure", "",
         "The KKL's minimum-time starts, stage by stage (ms from the start): the pair's "
         "inversion gives the first usable sample and the fix (`BeamFix`, its standard "
-        "error under 0.03 rad to go), the encoder carries the slew (`TimeOptimalSlew`), "
+        "error under 0.1 rad to go, refined on the way), the encoder carries the slew "
+        "(`TimeOptimalSlew`), "
         "and the estimator is restarted on arrival from the fix (standard error under "
         "0.006 rad). The bound is bang-bang at the torque limit over |phi0 - phi_ref|, "
         "the water's drag ignored.", "", *credit, "",

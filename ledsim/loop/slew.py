@@ -204,9 +204,9 @@ class FastAcquisition:
     """
 
     def __init__(self, constants: LinkConstants, inertia: float, limit: float,
-                 phi_ref: float, go_stderr: float = 0.03, arrive_stderr: float = 0.006,
+                 phi_ref: float, go_stderr: float = 0.1, arrive_stderr: float = 0.006,
                  arrive_tol: float = 0.005, arrive_rate: float = 0.3,
-                 dark_time: float = 0.05, creep_rate: float = 1.0, min_samples: int = 3):
+                 dark_time: float = 0.05, creep_rate: float = 1.0, min_samples: int = 1):
         self.fix = BeamFix(constants, phi_ref)
         self.slew = TimeOptimalSlew(inertia, limit, constants.Te)
         self.phi_ref = phi_ref

@@ -32,6 +32,8 @@ from .slew import FastAcquisition
 #: over within a few samples of light). It first waits 2 s where the beam was: a
 #: gimbal that did not turn while blind was occluded, and finds the beam where it was.
 FAST_SCAN = {"speed": 2.0, "widen": 0.4, "dwell": 2.0}
+#: Encoder angle [rad] within which a never-lit gimbal is at its centre and scans.
+CENTRE_REACHED = 0.05
 #: Standard deviation of a fast acquisition's re-seeded phidot [rad/s]: the encoder's
 #: rate, off by the hull's own turning that the line of sight does not remove.
 SEED_RATE_STD = 0.05
@@ -195,10 +197,15 @@ class LinkSupervisor:
             self.trusted_q.append(q)
             return Decision(xhat, True, reseeded=True, reason="acquired")
         if torque is None:  # the beam is out of view: scan for it
+            fast.q_hold = q
+            if not (self.trusted_q or scan.active) and abs(q) > CENTRE_REACHED:
+                # Never seen: the gimbal's centre first, at the torque limit (where a
+                # receiver mounted to face its transmitter most likely finds it).
+                return Decision(xhat, True, True, fast.slew.torque(q, qdot, 0.0),
+                                reason="acquiring")
             if not scan.active:  # around the last trusted angle, else the gimbal's centre
                 scan.start(self.trusted_q[0] if self.trusted_q else 0.0, q,
                            dwell=None if self.trusted_q else 0.0)
-            fast.q_hold = q
             torque = scan.torque(q, qdot, noise)
         else:
             scan.stop()
