@@ -9,6 +9,7 @@ Everything that computes a power, a transition or a noise sample reads them from
 
 from __future__ import annotations
 
+import functools
 import math
 from dataclasses import asdict, dataclass, field, replace
 from typing import TYPE_CHECKING
@@ -118,7 +119,7 @@ class LinkConstants:
         """Standard deviation of the power noise [W]."""
         return math.sqrt(self.measurement_noise_var)
 
-    @property
+    @functools.cached_property  # read on every model call: once per instance
     def layout(self) -> ReceiverLayout:
         """The receiver: the paper's pair of photodiodes, Delta phi apart, on one axis."""
         from .layout import paper_layout

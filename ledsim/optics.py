@@ -104,7 +104,8 @@ def layout_power_jacobian(gain, phi, c: LinkConstants) -> np.ndarray:
     offsets = c.layout.offsets
     jac = np.zeros(np.shape(phi) + (len(offsets), 2))
     for i, offset in enumerate(offsets):
-        jac[..., i, 0] = gain * receiver_response_derivative(phi + offset, c.receiver)
+        jac[..., i, 0] = gain * response_slope(*response_terms(phi + offset, c.receiver),
+                                               c.receiver)
     return jac
 
 
