@@ -156,7 +156,7 @@ def main() -> int:
         if args.steps < 1:
             raise LedsimError(f"--steps {args.steps} is not allowed: must be >= 1")
         if args.seeds < 1:
-            raise LedsimError(f"--seeds {args.seeds} is not allowed: must be >= 1")
+            raise LedsimError(f"--episodes/--seeds {args.seeds} is not allowed: must be >= 1")
         for d in args.disturbance:
             parse_disturbance(d)
         out = check_out_dir(args.out)

@@ -23,19 +23,26 @@ def test_a_short_baseline_writes_every_policys_figures(tmp_path):
     r = _run("--steps", "4096", "--seeds", "1", "--out", str(tmp_path / "rl"), cwd=tmp_path)
     assert r.returncode == 0, r.stderr
     res = json.loads((tmp_path / "rl" / "results.json").read_text())
-    for name in ("ppo", "recurrent_ppo", "shipped_kkl", "oracle"):
-        assert set(res[name]) == {"availability", "availability_steady", "mean_return",
-                                  "train_seconds", "env_steps"}, name
+    for name in ("ppo", "recurrent_ppo", "shipped_kkl", "oracle", "shipped_kkl_warm_up",
+                 "shipped_kkl_minimum_time", "oracle_warm_up", "oracle_minimum_time"):
+        assert {"availability", "availability_steady", "mean_return", "train_seconds",
+                "env_steps", "starts"} <= set(res[name]), name
         assert 0.0 <= res[name]["availability"] <= 1.0
         assert 0.0 <= res[name]["mean_return"] <= 1000.0
+        assert set(res[name]["starts"]) == {"0.3", "1.0", "-0.45"}
+        assert all(len(v) == 1 for v in res[name]["starts"].values())
     assert res["ppo"]["env_steps"] == 4096 and res["ppo"]["train_seconds"] > 0
     assert res["shipped_kkl"]["availability"] > 0.8  # ledsim run's stack holds the link
+    assert res["shipped_kkl_minimum_time"]["starts"]["1.0"][0] > 0.9  # finds the beam
     assert (tmp_path / "rl" / "learning_curve.png").stat().st_size > 1000
+    for name in ("ppo", "recurrent_ppo"):  # the trained policies, kept
+        assert (tmp_path / "rl" / f"{name}.zip").stat().st_size > 1000
 
 
 @pytest.mark.parametrize("args,needle", [
     (["--steps", "0"], "--steps 0"),
     (["--seeds", "0"], "--seeds 0"),
+    (["--episodes", "0"], "--seeds 0"),
     (["--disturbance", "wobble"], "wobble"),
 ])
 def test_bad_input_is_one_line(tmp_path, args, needle):
