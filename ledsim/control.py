@@ -33,6 +33,7 @@ class ControlLaw(Protocol):
 
 
 @functools.lru_cache(maxsize=64)
+@functools.lru_cache(maxsize=64)  # every law start and re-seed asks for it
 def intensity_maximum(constants: LinkConstants) -> float:
     """phi [rad] at which photodiode 1 receives the most power (the alignment target)."""
     phi = np.linspace(-0.5, 0.5, 100001)

@@ -159,8 +159,8 @@ def pair_shape_inverse(powers, c: LinkConstants) -> tuple[float, float, float]:
         return math.nan, math.nan, math.inf
     table = _shape_table(c.receiver, c.dphi)
     phi = float(np.interp(math.log(p1 / p2), table, _SHAPE_PHI))
-    g1, dg1 = _response_and_slope(phi, c.receiver)
-    g2, dg2 = _response_and_slope(phi + c.dphi, c.receiver)
+    g1, dg1 = response_and_slope(phi, c.receiver)
+    g2, dg2 = response_and_slope(phi + c.dphi, c.receiver)
     gain = (p1 * g1 + p2 * g2) / (g1 * g1 + g2 * g2)
     d1, d2 = gain * dg1, gain * dg2
     det = d1 * g2 - d2 * g1  # J = [[d1, g1], [d2, g2]]
@@ -170,7 +170,7 @@ def pair_shape_inverse(powers, c: LinkConstants) -> tuple[float, float, float]:
     return phi, gain, v
 
 
-def _response_and_slope(phi: float, r: ReceiverResponse) -> tuple[float, float]:
+def response_and_slope(phi: float, r: ReceiverResponse) -> tuple[float, float]:
     """(g(phi), dg/dphi) for one angle, in plain floats (the per-step paths)."""
     terms = response_terms(phi, r, math.exp)
     return terms[2] + terms[3], response_slope(*terms, r)

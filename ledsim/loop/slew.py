@@ -27,7 +27,7 @@ from collections import deque
 from dataclasses import dataclass
 
 from ..config import LinkConstants
-from ..optics import pair_shape_inverse, response_slope, response_terms
+from ..optics import pair_shape_inverse, response_and_slope
 
 
 class BeamFix:
@@ -93,20 +93,22 @@ class BeamFix:
     def phi_variance(self, phi: float, powers, noise_std: float) -> float:
         """Variance of one sample's inverted phi [rad^2]: the log-ratio's noise
         sigma^2 (1/P1^2 + 1/P2^2) over its squared slope in phi there (``powers`` [W])."""
-        r = self.c.receiver
-        t1 = response_terms(phi, r, math.exp)
-        t2 = response_terms(phi + self.c.dphi, r, math.exp)
-        slope = (response_slope(*t1, r) / (t1[2] + t1[3])
-                 - response_slope(*t2, r) / (t2[2] + t2[3]))
+        g1, dg1 = response_and_slope(phi, self.c.receiver)
+        g2, dg2 = response_and_slope(phi + self.c.dphi, self.c.receiver)
+        slope = dg1 / g1 - dg2 / g2
         if slope == 0:
             return math.inf
         return noise_std * noise_std * sum(1.0 / (p * p) for p in powers) / (slope * slope)
 
+    def _weighted_mean(self, column: int) -> float | None:
+        """The inverse-variance weighted mean of a sample column (None: no sample)."""
+        w = sum(s[1] for s in self._samples)
+        return sum(s[1] * s[column] for s in self._samples) / w if w > 0 else None
+
     @property
     def target(self) -> float | None:
         """Encoder angle [rad] at which phi is the alignment target (None: no sample)."""
-        w = sum(s[1] for s in self._samples)
-        return sum(s[1] * s[2] for s in self._samples) / w if w > 0 else None
+        return self._weighted_mean(2)
 
     @property
     def stderr(self) -> float:
@@ -118,8 +120,7 @@ class BeamFix:
     def gain(self) -> float | None:
         """The transmitter gain the samples saw [W], weighted as the target (None: no
         sample)."""
-        w = sum(s[1] for s in self._samples)
-        return sum(s[1] * s[3] for s in self._samples) / w if w > 0 else None
+        return self._weighted_mean(3)
 
 
 class TimeOptimalSlew:
@@ -212,7 +213,6 @@ class FastAcquisition:
         self.phi_ref = phi_ref
         self.go_stderr, self.arrive_stderr = go_stderr, arrive_stderr
         self.arrive_tol, self.arrive_rate = arrive_tol, arrive_rate
-        self.Te = constants.Te
         self.dark_steps = max(1, int(round(dark_time / constants.Te)))
         self.creep_rate = creep_rate
         self.min_samples = min_samples
@@ -228,9 +228,6 @@ class FastAcquisition:
         self.dark = 0
         self.moving = False
         self.log.append(AcquisitionLog())
-
-    def stop(self) -> None:
-        self.active = False
 
     @property
     def out_of_view(self) -> bool:
