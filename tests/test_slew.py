@@ -111,3 +111,12 @@ def test_the_envs_shipped_policy_takes_the_acquisition():
             env.close()
         shares[acq] = np.mean(np.array(rewards) >= 0.9)
     assert shares["minimum-time"] > 0.9 > 0.5 > shares["warm-up"]
+
+
+def test_weak_light_still_hands_over_to_the_estimator():
+    """Where the light is too weak for the fix to reach its hand-over error within its
+    memory (0.12 m), the acquisition hands over after one memory at the target instead
+    of holding the link in 'acquiring' for good."""
+    m = run_once(RunConfig(acquisition="minimum-time", distance=0.12, seconds=3.0), 7).metrics
+    assert m.lost_share < 0.3
+    assert m.availability > 0.9

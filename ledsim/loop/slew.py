@@ -191,7 +191,8 @@ class FastAcquisition:
     a usable sample, the beam is out of view and the caller scans); then it slews to the
     fix on :class:`TimeOptimalSlew`, refining the target with every sample on the way,
     and hands over once the encoder is within ``arrive_tol`` of it at under
-    ``arrive_rate``, with a standard error under ``arrive_stderr``: the estimator
+    ``arrive_rate``, with a standard error under ``arrive_stderr`` (or after one memory
+    of the fix at the target, where the light is too weak for that): the estimator
     restarts from phi = phi_ref + (target - q), phidot = -qdot.
 
     Args:
@@ -262,7 +263,11 @@ class FastAcquisition:
         there = abs(target - q) < self.arrive_tol and abs(qdot) < self.arrive_rate
         if there and log.reached is None:
             log.reached = log.steps
-        if there and err < self.arrive_stderr:
+        # The fix holds one memory's worth of samples: where the light is too weak for
+        # them to reach arrive_stderr, waiting longer at the target gains nothing.
+        settled = log.reached is not None and \
+            log.steps - log.reached >= self.fix.memory_steps
+        if there and (err < self.arrive_stderr or settled):
             self.active = False
             log.arrived = log.steps
             return None, (self.phi_ref + (target - q), -qdot)
