@@ -191,8 +191,9 @@ class FastAcquisition:
     a usable sample, the beam is out of view and the caller scans); then it slews to the
     fix on :class:`TimeOptimalSlew`, refining the target with every sample on the way,
     and hands over once the encoder is within ``arrive_tol`` of it at under
-    ``arrive_rate``, with a standard error under ``arrive_stderr`` (or after one memory
-    of the fix at the target, where the light is too weak for that): the estimator
+    ``arrive_rate``, with a standard error under ``arrive_stderr`` (or under
+    ``settle_stderr`` after one memory of the fix at the target, where the light is too
+    weak for better): the estimator
     restarts from phi = phi_ref + (target - q), phidot = -qdot.
 
     Args:
@@ -203,12 +204,15 @@ class FastAcquisition:
         dark_time: time without a usable sample after which the beam is out of view [s].
         creep_rate: the speed towards a fix not yet good enough to slew to [rad/s].
         min_samples: samples the fix needs before the gimbal moves on it [-].
+        settle_stderr: the fix's standard error under which it hands over after one
+            memory at the target even above ``arrive_stderr`` (weak light) [rad].
     """
 
     def __init__(self, constants: LinkConstants, inertia: float, limit: float,
                  phi_ref: float, go_stderr: float = 0.1, arrive_stderr: float = 0.006,
                  arrive_tol: float = 0.005, arrive_rate: float = 0.3,
-                 dark_time: float = 0.05, creep_rate: float = 1.0, min_samples: int = 1):
+                 dark_time: float = 0.05, creep_rate: float = 1.0, min_samples: int = 1,
+                 settle_stderr: float = 0.018):
         self.fix = BeamFix(constants, phi_ref)
         self.slew = TimeOptimalSlew(inertia, limit, constants.Te)
         self.phi_ref = phi_ref
@@ -217,6 +221,7 @@ class FastAcquisition:
         self.dark_steps = max(1, int(round(dark_time / constants.Te)))
         self.creep_rate = creep_rate
         self.min_samples = min_samples
+        self.settle_stderr = settle_stderr
         self.active = False
         #: One :class:`AcquisitionLog` per acquisition, in order.
         self.log: list[AcquisitionLog] = []
@@ -264,8 +269,9 @@ class FastAcquisition:
         if there and log.reached is None:
             log.reached = log.steps
         # The fix holds one memory's worth of samples: where the light is too weak for
-        # them to reach arrive_stderr, waiting longer at the target gains nothing.
-        settled = log.reached is not None and \
+        # them to reach arrive_stderr, waiting longer at the target gains nothing; a fix
+        # worse than settle_stderr even so is not one to hand over on.
+        settled = log.reached is not None and err < self.settle_stderr and \
             log.steps - log.reached >= self.fix.memory_steps
         if there and (err < self.arrive_stderr or settled):
             self.active = False
