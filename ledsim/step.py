@@ -12,9 +12,11 @@ paper's closed-form experiments. At step t:
    estimator as it is);
 3. **control law**: the input u [rad/s^2] from the estimate; during the warm-up the
    motor holds its encoder angle instead, and while scanning the scan drives it;
-4. **actuator**: u becomes a motor command (:class:`GimbalMotor` in MuJoCo,
-   :class:`DirectInput` for the closed-form model), and the supervisor runs the
-   estimator's ``predict`` with the u that command gives.
+4. **actuator**: the supervisor runs the estimator's ``predict`` with the u the motor
+   gives, and u becomes a motor command (:class:`GimbalMotor` in MuJoCo,
+   :class:`DirectInput` for the closed-form model). The step keeps one unit, u = phi''
+   [rad/s^2], from the acquisition, the warm-up hold and the law to the motor's limit;
+   only its last line turns u into a torque.
 
 With the vehicle's measurement of the line of sight (``los``, a
 :class:`~ledsim.physics.vehicle.LineOfSight`: the IMU, the DVL and the encoder), the
@@ -55,15 +57,17 @@ class Decision:
         xhat: the estimate (phi [rad], phidot [rad/s]).
         lost: the estimate is not trusted (inconsistent with the data, or scanning).
         acquiring: the acquisition scan has the motor.
-        torque: the scan's motor torque [N m] (None: the control law decides).
-        reseeded: the estimator was restarted from the scan this step.
+        u: the acquisition's input, phi'' [rad/s^2] (None: the control law decides).
+        reseeded: the acquisition handed over this step (the estimator restarted from
+            it, or kept as it is: the oracle, a weak-light hand-over); the control law
+            starts afresh.
         reason: why the link is lost ("" when it is not).
     """
 
     xhat: np.ndarray
     lost: bool
     acquiring: bool = False
-    torque: float | None = None
+    u: float | None = None
     reseeded: bool = False
     reason: str = ""
 
@@ -105,7 +109,7 @@ class Unsupervised:
         if abs(error) < self.arrive_tol and abs(float(phidot)) < self.arrive_rate:
             self.slewing = False
             return Decision(xhat, False, reseeded=True, reason="acquired")
-        return Decision(xhat, False, True, self.slew.torque(q, qdot, q + error),
+        return Decision(xhat, False, True, self.slew.command(q, qdot, q + error),
                         reason="acquiring")
 
     def predict(self, u) -> None:
@@ -113,15 +117,17 @@ class Unsupervised:
 
 
 class GimbalMotor:
-    """The gimbal's motor seen from the paper's input u.
+    """The gimbal's motor seen from the paper's input u [rad/s^2].
 
-    phi = phi_home - q, so a torque tau gives phi'' = -tau / I: ``torque(u) = -I u``.
+    The control step works in u throughout; the motor turns it into a torque once, at
+    the end: phi = phi_home - q, so a torque tau gives phi'' = -tau / I, and
+    ``torque(u) = -I u``. The torque limit is ``u_limit = limit / I`` in u.
 
     Args:
         inertia: the gimbal's inertia about the hinge [kg m^2].
         q_hold: encoder angle [rad] the motor holds during the warm-up.
-        hold_gains: PD gains of that hold, in units of the inertia (1/s^2, 1/s): 10 rad/s
-            of bandwidth.
+        hold_gains: PD gains of that hold (1/s^2, 1/s): 10 rad/s of bandwidth.
+        limit: the motor's torque limit [N m].
     """
 
     def __init__(self, inertia: float, q_hold: float = 0.0,
@@ -130,23 +136,31 @@ class GimbalMotor:
         self.q_hold = q_hold
         self.hold_gains = hold_gains
         self.limit = limit
+        self.u_limit = limit / inertia  # [rad/s^2]
 
-    def applied(self, torque: float) -> float:
-        """The torque the motor gives for a command [N m] (clipped at its limit)."""
-        return min(max(torque, -self.limit), self.limit)
+    def applied(self, u: float) -> float:
+        """The u [rad/s^2] the motor gives for a commanded ``u`` (clipped at its limit)."""
+        return min(max(u, -self.u_limit), self.u_limit)
 
     def torque(self, u: float) -> float:
-        """Motor torque [N m] that commands angular acceleration ``u`` [rad/s^2] of phi."""
-        return -self.inertia * u
+        """Motor torque [N m] that commands angular acceleration ``u`` [rad/s^2] of phi,
+        within the limit, as the motor takes it: a duty in [-1, 1] times the limit (the
+        Gymnasium env's action), so an agent that sends that duty applies the same
+        torque to the last bit."""
+        tau = -self.inertia * u
+        if not math.isfinite(self.limit):
+            return tau
+        return self.limit * min(max(tau / self.limit, -1.0), 1.0)
 
     def acceleration(self, torque: float) -> float:
-        """The u [rad/s^2] a motor torque [N m] commands."""
+        """The u [rad/s^2] a motor torque [N m] commands (an agent's torque, say)."""
         return -torque / self.inertia
 
     def hold(self, q: float, qdot: float) -> float:
-        """Warm-up torque [N m]: PD on the encoder angle ``q`` [rad] and rate ``qdot``."""
+        """Warm-up input u [rad/s^2]: PD on the encoder angle ``q`` [rad] and rate
+        ``qdot`` [rad/s] (q'' = -u)."""
         kp, kd = self.hold_gains
-        return -kp * self.inertia * (q - self.q_hold) - kd * self.inertia * qdot
+        return kp * (q - self.q_hold) + kd * qdot
 
 
 class DirectInput:
@@ -155,11 +169,8 @@ class DirectInput:
     def torque(self, u: float) -> float:
         return u
 
-    def applied(self, command: float) -> float:
-        return command
-
-    def acceleration(self, torque: float) -> float:
-        return torque
+    def applied(self, u: float) -> float:
+        return u
 
     def hold(self, q: float, qdot: float) -> float:
         return 0.0
@@ -179,7 +190,7 @@ class ControlStep:
             and ``predict(u)``.
         law: the control law template (a fresh copy starts now and after a re-seed).
         constants: the link (binds the law).
-        actuator: turns u into a motor command and back; holds during the warm-up.
+        actuator: its limit in u, the warm-up hold, and the torque of a u.
         warmup: no control-law input before this time [s].
         model: the one-step model of the gimbal (``f``) for the load observer of runs
             with the vehicle's sensors (None: no load observer).
@@ -210,9 +221,10 @@ class ControlStep:
 
     def __call__(self, y: np.ndarray, t: float, q: float = 0.0, qdot: float = 0.0,
                  los=None) -> float:
-        """The motor command of step ``t`` [s] from the measured powers ``y`` [W], the
-        encoder angle ``q`` [rad] and rate ``qdot`` [rad/s], and (None: no vehicle
-        sensors) the vehicle's measured line of sight ``los``."""
+        """The motor torque [N m] (u itself for :class:`DirectInput`) of step ``t`` [s]
+        from the measured powers ``y`` [W], the encoder angle ``q`` [rad] and rate
+        ``qdot`` [rad/s], and (None: no vehicle sensors) the vehicle's measured line of
+        sight ``los``."""
         if los is not None:  # the encoder in the line of sight's frame
             load = 0.0 if self.load is None else \
                 self.load.update(qdot + los.hull_rate, self._motor_u)
@@ -222,23 +234,20 @@ class ControlStep:
         if d.reseeded:
             self.law = self.law_template.start(self.constants)
         act = self.actuator
-        if d.torque is not None:  # the acquisition scan has the motor
-            command = d.torque
-            u = act.acceleration(command)
+        if d.u is not None:  # the acquisition has the motor
+            u = command = d.u
         elif t < self.warmup:  # the estimator is still forgetting its initial guess
-            command = act.hold(q, qdot)
-            u = 0.0
+            command, u = act.hold(q, qdot), 0.0
         else:
             if self._holding and hasattr(self.law, "take_over"):
-                self.law.take_over(act.acceleration(self._last_command))
-            u = self.law(d.xhat, t)
-            command = act.torque(u)
-        self._holding = d.torque is None and t < self.warmup
+                self.law.take_over(self._last_command)
+            u = command = self.law(d.xhat, t)
+        self._holding = d.u is None and t < self.warmup
         self._last_command = command
         if los is not None:  # turn with the bearing, cancel the load; phi'' gets the rest
-            command += act.torque(-los.acceleration - load)
-            self._motor_u = act.acceleration(act.applied(command))
+            command = command - los.acceleration - load
+            self._motor_u = act.applied(command)
             u = self._motor_u + load + los.acceleration
         self.supervisor.predict(u)
         self.decision, self.u = d, u
-        return command
+        return act.torque(command)

@@ -150,7 +150,16 @@ class ScheduledKKL(Estimator):
         self.locked = 0.0 if self.decoder_locked is None else \
             min(max((self._inside - memory) / sch.lock_ramp, 0.0), 1.0)
         if self.locked > 0:
-            x = x + self.locked * (self.decoder_locked(self.z, self.w, self.noise) - x)
+            near = self.decoder_locked(self.z, self.w, self.noise)
+            if np.max(np.abs(near - x) / sys_.domain_halfwidth) > sch.disagree:
+                # Powers the model does not explain (a gain or a parallax error of a
+                # moving hull) put z off the locked decoder's training states, where
+                # it extrapolates: its rate ran the other way from the true one, and
+                # the loop followed it off by radians. Back to the wide decoder, and
+                # to a fresh stay inside the box.
+                self._inside, self.locked = 0.0, 0.0
+            else:
+                x = x + self.locked * (near - x)
         return x
 
     # -- Estimator interface ---------------------------------------------------------

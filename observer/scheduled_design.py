@@ -120,6 +120,8 @@ class GainSchedule:
         settle_off: averaging time of the estimate's distance from the operating point
             for the lock and recover tests [s].
         jump: a distance of this many locked boxes acts at once (a kick) [-].
+        disagree: the locked decoder is dropped when its estimate is this far from the
+            wide one's, in domain half-widths (either component) [-].
     """
 
     start: float = 2.0
@@ -134,15 +136,16 @@ class GainSchedule:
     lock_ramp: float = 0.5
     settle_off: float = 0.1
     jump: float = 3.0
+    disagree: float = 0.1
 
     def __post_init__(self):
         positive = (self.start, self.settle, self.quiet, self.recover, self.lock_ramp,
-                    self.settle_off, self.jump)
+                    self.settle_off, self.jump, self.disagree)
         if min(positive) <= 0 or self.step_ratio < 1 or \
                 min(self.noise_power, self.start_power, self.recover_power,
                     self.lock_after) < 0:
             raise ObserverError(f"{self!r}: start, settle, quiet, recover, lock_ramp, "
-                                "settle_off, jump > 0, "
+                                "settle_off, jump, disagree > 0, "
                                 "noise_power, start_power, recover_power, lock_after >= 0 and "
                                 "step_ratio >= 1 are needed")
 

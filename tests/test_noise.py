@@ -37,7 +37,9 @@ def test_the_link_constants_give_the_noise_object():
 
 
 def test_a_run_reads_one_noise_object():
-    loop = ClosedLoop(RunConfig(seconds=0.2, noise_scale=2.5), [3])
+    # The warm-up holds the gimbal still for these 0.2 s at either noise, so the
+    # signal is the same and the SNRs differ by the noise alone.
+    loop = ClosedLoop(RunConfig(seconds=0.2, noise_scale=2.5, acquisition="warm-up"), [3])
     run = loop.runs[0]
     assert run.sensor.measurement_noise is run.noise
     assert run.noise.std == pytest.approx(2.5 * loop.system.constants.measurement_noise_std)
@@ -48,7 +50,7 @@ def test_a_run_reads_one_noise_object():
                                run.noise.std, rtol=1e-12)
     # The link budget is that noise's: an SNR 2.5^2 below the nominal run's.
     out = loop.run(False)[0]
-    nominal = ClosedLoop(RunConfig(seconds=0.2), [3]).run(False)[0]
+    nominal = ClosedLoop(RunConfig(seconds=0.2, acquisition="warm-up"), [3]).run(False)[0]
     assert nominal.metrics.snr_db - out.metrics.snr_db == pytest.approx(
         20 * np.log10(2.5), abs=0.3)
 

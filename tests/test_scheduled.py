@@ -1,5 +1,7 @@
 """The gain-scheduled KKL: maps over a range of gains, a schedule, its checkpoint."""
 
+from dataclasses import replace
+
 import numpy as np
 import pytest
 from conftest import assert_user_error, run_cli
@@ -45,12 +47,23 @@ def test_the_encoder_is_learned_at_every_grid_gain(scheduled):
 
 def test_the_schedule_starts_fast_and_settles_to_a_floor_set_by_the_noise(scheduled, system):
     obs, _ = scheduled
+    shipped = obs.schedule
+    # This tiny test network's two decoders differ by more than the shipped pair's.
+    obs.schedule = replace(shipped, disagree=1.0)
     obs.set_noise(1.0)
     obs.reset([0.01, 0.0])
     assert obs.w == pytest.approx(2.0)
     _run(obs, system, [0.01, 0.0], 400)  # near the operating point: it slows and locks
     assert obs.w == pytest.approx(obs.schedule.floor(1.0), rel=0.06)
     assert obs.locked == 1.0
+    # A locked decoder that parts from the wide one (powers the model does not explain)
+    # is dropped at once, and the estimate is the wide decoder's.
+    locked = obs.decoder_locked
+    obs.decoder_locked = lambda z, w, s: locked(z, w, s) + np.array([0.0, 0.6])
+    x = obs.update(system.h(np.array([0.01, 0.0])))
+    assert obs.locked == 0.0
+    np.testing.assert_allclose(x, obs.decoder_T_star(obs.z, obs.w, obs.noise))
+    obs.decoder_locked, obs.schedule = locked, shipped
     obs.set_noise(4.0)
     obs.reset([0.01, 0.0])
     assert obs.w < 2.0  # a noisy link starts slower
@@ -167,5 +180,5 @@ def test_the_shipped_checkpoint_is_what_train_design_scheduled_makes():
     from ledsim.resources import shipped_checkpoint
 
     meta = ckpt.metadata(shipped_checkpoint(0.085, "mujoco", design="scheduled"))
-    assert meta["schedule"] == asdict(GainSchedule())
+    assert asdict(GainSchedule(**meta["schedule"])) == asdict(GainSchedule())
     assert ScheduledDesign.from_dict(meta["scheduled_design"]) == ScheduledDesign()

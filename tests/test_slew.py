@@ -24,11 +24,11 @@ def slew_on_an_inertia(target: float, steps: int = 40, substeps: int = 5):
     slew = TimeOptimalSlew(INERTIA, LIMIT, C.Te)
     q, v, path = 0.0, 0.0, []
     for _ in range(steps):
-        tau = slew.torque(q, v, target)
-        assert abs(tau) <= LIMIT
+        u = slew.command(q, v, target)  # phi'' = -q''
+        assert abs(u) <= LIMIT / INERTIA
         h = C.Te / substeps
         for _ in range(substeps):
-            v += tau / INERTIA * h
+            v -= u * h
             q += v * h
         path.append((q, v))
     return np.array(path)
@@ -62,10 +62,10 @@ def test_the_fix_finds_the_beam_from_noisy_pairs_and_ignores_darkness():
 
 
 def test_minimum_time_acquisition_aligns_in_a_fraction_of_a_second():
-    kkl = run_once(RunConfig(acquisition="minimum-time", seconds=2.0), 0).metrics
+    kkl = run_once(RunConfig(seconds=2.0), 0).metrics  # minimum-time: the default
     assert kkl.alignment_time is not None and kkl.alignment_time < 0.25
     assert kkl.silent_error_share == 0.0
-    warm = run_once(RunConfig(seconds=2.0), 0).metrics
+    warm = run_once(RunConfig(acquisition="warm-up", seconds=2.0), 0).metrics
     assert warm.alignment_time is None or warm.alignment_time > 1.0  # the warm-up's 1 s
     oracle = run_once(RunConfig(estimator="oracle", acquisition="minimum-time",
                                 seconds=2.0), 0).metrics

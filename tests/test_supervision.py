@@ -209,9 +209,15 @@ def test_detection_delay_counts_a_loss_already_on_at_the_event():
 
 def test_converging_from_the_initial_guess_is_not_a_lost_link():
     # The KKL's first 0.4 s used to show as a loss ([[0.06, 0.43]]) with no disturbance.
-    out = _run(estimator="kkl")
+    out = _run(estimator="kkl", acquisition="warm-up")
     assert out.metrics.link_events == []
     assert not out.trace.lost.any()
+    # The minimum-time start says it has no link until it has one: one event from the
+    # start to the hand-over, and none after it.
+    fast = _run(estimator="kkl")
+    (start, end), = fast.metrics.link_events
+    assert start == 0.0 and end is not None and end < 0.25
+    assert not fast.trace.lost[int(round(end / 0.01)):].any()
 
 
 def test_a_fast_kick_is_flagged_at_once_and_recovered():

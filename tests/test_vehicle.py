@@ -32,8 +32,14 @@ def test_the_imu_keeps_the_link_in_a_cross_current_where_the_photodiodes_alone_l
     aided = run_batch(RunConfig(estimator="kkl", disturbances=spec), [0, 1], threads=2)
     alone = run_batch(RunConfig(estimator="kkl", disturbances=spec, imu=False), [0, 1],
                       threads=2)
-    assert min(o.metrics.availability for o in aided) > 0.6
-    assert max(o.metrics.availability for o in alone) < 0.3
+    assert min(o.metrics.availability for o in aided) > 0.9
+    # Without the IMU the minimum-time reacquisition wins back part of it (0.6-0.65,
+    # lost 40% of the time); the warm-up's slow scan did not (0.0).
+    assert max(o.metrics.availability for o in alone) < 0.75
+    assert min(o.metrics.lost_share for o in alone) > 0.3
+    slow = run_batch(RunConfig(estimator="kkl", disturbances=spec, imu=False,
+                               acquisition="warm-up"), [0, 1], threads=2)
+    assert max(o.metrics.availability for o in slow) < 0.3
 
 
 def test_a_hull_kick_is_flagged_within_0_2_s_and_the_link_comes_back():

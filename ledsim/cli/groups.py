@@ -49,10 +49,10 @@ def add_start_arg(p) -> None:
     from ..loop.config import ACQUISITIONS, MAX_INITIAL_ANGLE, TaskPart
 
     p.add_argument("--acquisition", default=TaskPart.acquisition, **choices(ACQUISITIONS),
-                   help="warm-up: hold while the estimator converges, then slew at the "
-                   "control law's rate limit; minimum-time: fix the beam from the pair of "
+                   help="minimum-time (the default): fix the beam from the pair of "
                    "powers and slew there at the torque limit on the encoder (supervised "
-                   "runs)")
+                   "runs); warm-up: hold while the estimator converges, then slew at the "
+                   "control law's rate limit (the default of ledsim 0.2 and before)")
     p.add_argument("--initial-angle", type=number(-MAX_INITIAL_ANGLE, MAX_INITIAL_ANGLE,
                                                   "rad"),
                    default=None, metavar="RAD",

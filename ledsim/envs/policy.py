@@ -19,7 +19,12 @@ def torque_action(torque: float, limit: float) -> float:
     """The action in [-1, 1] whose ``action * limit`` is ``torque`` [N m] to the last
     bit where one exists (so the environment applies what ``ledsim run`` applies)."""
     a = torque / limit
-    for cand in (a, np.nextafter(a, np.inf), np.nextafter(a, -np.inf)):
+    # A torque that is some duty times the limit (GimbalMotor's) is within two ulps.
+    up, down = [a], [a]
+    for _ in range(2):
+        up.append(float(np.nextafter(up[-1], np.inf)))
+        down.append(float(np.nextafter(down[-1], -np.inf)))
+    for cand in (a, up[1], down[1], up[2], down[2]):
         if float(cand) * limit == torque:
             a = float(cand)
             break

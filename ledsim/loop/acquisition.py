@@ -66,8 +66,7 @@ class AcquisitionScan:
 
     Args:
         constants: the link (Te, the receiver response, dphi).
-        inertia: gimbal inertia about the hinge [kg m^2].
-        gains: encoder gains (kp [1/s^2], kd [1/s]) in units of the inertia: a rate loop
+        gains: encoder gains (kp [1/s^2], kd [1/s]): a rate loop
             of bandwidth kd under a position loop of bandwidth kp / kd.
         speed: scan speed of the encoder angle [rad/s].
         widen: growth of the scan's half-width every half sweep [rad].
@@ -79,12 +78,11 @@ class AcquisitionScan:
         max_hold: longest stop on light that does not yet give a re-seed [s].
     """
 
-    def __init__(self, constants: LinkConstants, inertia: float,
+    def __init__(self, constants: LinkConstants,
                  gains: tuple[float, float] = (100.0, 20.0), speed: float = 0.4,
                  widen: float = 0.15, window: float = 0.2, detect_sigmas: float = 8.0,
                  centre_margin: float = 0.45, dwell: float = 1.0, max_hold: float = 0.5):
         self.c = constants
-        self.inertia = inertia
         self.gains = gains
         self.speed = speed
         self.widen = widen
@@ -110,8 +108,9 @@ class AcquisitionScan:
     def stop(self) -> None:
         self.active = False
 
-    def torque(self, q: float, qdot: float, noise_std: float) -> float:
-        """Motor torque [N m] that follows the scan; advances the reference by Te.
+    def command(self, q: float, qdot: float, noise_std: float) -> float:
+        """The input u = phi'' [rad/s^2] (q'' = -u) that follows the scan; advances the
+        reference by Te.
 
         Where the last few samples show light (``noise_std`` [W] sets the bar), the scan
         holds still for up to ``max_hold`` s, so the re-seed's window fills on the beam.
@@ -147,11 +146,11 @@ class AcquisitionScan:
 
     def _follow(self, q: float, qdot: float, feed: float) -> float:
         # Cascade: position error -> rate target (capped, so a kicked gimbal comes back
-        # no faster than the scan), rate error -> torque.
+        # no faster than the scan), rate error -> acceleration of q (phi'' = -q'').
         kp, kd = self.gains
         cap = 1.25 * self.speed
         rate_ref = float(np.clip(feed + kp / kd * (self.q_ref - q), -cap, cap))
-        return self.inertia * kd * (rate_ref - qdot)
+        return kd * (qdot - rate_ref)
 
     def record(self, y: np.ndarray, q: float) -> None:
         """Keep the gated powers ``y`` [W] seen at encoder angle ``q`` [rad] (every step,

@@ -98,7 +98,7 @@ class TaskPart:
             converges, then slews under the control law at its rate limit, and scans
             for a lost beam; ``minimum-time`` fixes the beam from the pair of powers and
             slews there at the torque limit, carried on the encoder, with no warm-up
-            (:mod:`ledsim.loop.slew`; supervised runs).
+            (:mod:`ledsim.loop.slew`; supervised runs; the default).
         initial_angle: the true incidence angle phi at the start [rad], at rest (None:
             the scenario's); |phi| <= :data:`MAX_INITIAL_ANGLE`. Beyond about 0.6 rad the
             LED is outside the receiver's field of view.
@@ -109,7 +109,7 @@ class TaskPart:
     seconds: float | None = None
     supervision: bool = True
     initial_angle: float | None = None
-    acquisition: str = "warm-up"
+    acquisition: str = "minimum-time"
 
 
 @dataclass(frozen=True)

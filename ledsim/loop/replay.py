@@ -132,7 +132,8 @@ def replay_onnx(est, arrays: dict[str, np.ndarray], onnx: str | Path) -> float:
                                   arrays["call_nargs"], arrays["call_out"], strict=True):
         name = CALLS[int(kind)]
         if name == "reset":
-            z = est.encode(est.initial_guess(args[:n] if n else None))
+            # x0, then its covariance (which a KKL has no use for)
+            z = est.encode(est.initial_guess(args[:est.system.n_state] if n else None))
         elif name == "update":
             y, out = args[:n], rec
         elif name == "predict":

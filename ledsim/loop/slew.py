@@ -23,104 +23,12 @@ Two pieces, each with one job:
 from __future__ import annotations
 
 import math
-from collections import deque
 from dataclasses import dataclass
 
 from ..config import LinkConstants
-from ..optics import pair_shape_inverse, response_and_slope
+from .beamfix import BeamFix
 
-
-class BeamFix:
-    """Where the beam is, in the encoder's frame, from the pair of powers.
-
-    Args:
-        constants: the link (the receiver response, dphi, Te).
-        phi_ref: the alignment target, phi at the intensity maximum [rad].
-        detect_sigmas: a sample counts when both powers are this many noise standard
-            deviations above zero [-].
-        max_phi: samples whose inverted |phi| exceeds this are left out [rad] (far in the
-            tail the log-ratio is dominated by the shoulder's model error).
-        memory: samples older than this are forgotten [s]: they may no longer hold (a
-            drifting transmitter, a hull turning without the IMU).
-        agree_sigmas: a sample further than this many standard deviations from the
-            others' fix starts the fix afresh (the beam moved, or the older samples were
-            a partly shaded pair, whose shape lies about phi) [-].
-    """
-
-    def __init__(self, constants: LinkConstants, phi_ref: float, detect_sigmas: float = 4.0,
-                 max_phi: float = 0.8, memory: float = 0.3, agree_sigmas: float = 4.0):
-        self.c = constants
-        self.phi_ref = phi_ref
-        self.detect_sigmas = detect_sigmas
-        self.max_phi = max_phi
-        self.memory_steps = max(1, int(round(memory / constants.Te)))
-        self.agree_sigmas = agree_sigmas
-        # (step, weight [1/rad^2], target encoder angle [rad], gain [W]) of each sample.
-        self._samples: deque = deque()
-        self._step = 0
-
-    def clear(self) -> None:
-        self._samples.clear()
-
-    @property
-    def samples(self) -> int:
-        return len(self._samples)
-
-    def add(self, y, q: float, noise_std: float) -> bool:
-        """Take the powers ``y`` [W] measured at encoder angle ``q`` [rad] with noise
-        ``noise_std`` [W] (one call a control step, usable or not); True when the sample
-        was usable."""
-        self._step += 1
-        while self._samples and self._step - self._samples[0][0] > self.memory_steps:
-            self._samples.popleft()
-        powers = [float(v) for v in y]
-        bar = self.detect_sigmas * noise_std
-        if not all(p > bar for p in powers):  # dark, gated out (NaN) or in the noise
-            return False
-        phi, gain, _ = pair_shape_inverse(powers, self.c)
-        if not abs(phi) <= self.max_phi:
-            return False
-        var = self.phi_variance(phi, powers, noise_std)
-        if not var > 0 or not math.isfinite(var):
-            return False
-        target = q + phi - self.phi_ref
-        if self._samples and abs(target - self.target) > self.agree_sigmas * math.sqrt(
-                var + self.stderr**2):
-            self._samples.clear()
-        self._samples.append((self._step, 1.0 / var, target, gain))
-        return True
-
-    def phi_variance(self, phi: float, powers, noise_std: float) -> float:
-        """Variance of one sample's inverted phi [rad^2]: the log-ratio's noise
-        sigma^2 (1/P1^2 + 1/P2^2) over its squared slope in phi there (``powers`` [W])."""
-        g1, dg1 = response_and_slope(phi, self.c.receiver)
-        g2, dg2 = response_and_slope(phi + self.c.dphi, self.c.receiver)
-        slope = dg1 / g1 - dg2 / g2
-        if slope == 0:
-            return math.inf
-        return noise_std * noise_std * sum(1.0 / (p * p) for p in powers) / (slope * slope)
-
-    def _weighted_mean(self, column: int) -> float | None:
-        """The inverse-variance weighted mean of a sample column (None: no sample)."""
-        w = sum(s[1] for s in self._samples)
-        return sum(s[1] * s[column] for s in self._samples) / w if w > 0 else None
-
-    @property
-    def target(self) -> float | None:
-        """Encoder angle [rad] at which phi is the alignment target (None: no sample)."""
-        return self._weighted_mean(2)
-
-    @property
-    def stderr(self) -> float:
-        """Standard error of :attr:`target` [rad] (inf: no sample)."""
-        w = sum(s[1] for s in self._samples)
-        return 1.0 / math.sqrt(w) if w > 0 else math.inf
-
-    @property
-    def gain(self) -> float | None:
-        """The transmitter gain the samples saw [W], weighted as the target (None: no
-        sample)."""
-        return self._weighted_mean(3)
+__all__ = ["AcquisitionLog", "BeamFix", "FastAcquisition", "TimeOptimalSlew"]
 
 
 class TimeOptimalSlew:
@@ -131,9 +39,10 @@ class TimeOptimalSlew:
     from now is the braking curve ``sqrt(2 alpha a |e|)`` at the error expected then
     (``a`` the acceleration the torque limit gives, ``alpha`` a margin for the water's
     drag), capped near the target by ``settle / Te`` times that error (a deadbeat
-    approach over 1 / settle steps), and the torque is what reaches that rate in one step
-    (within the limit). This is the proximate time-optimal servo of Workman, Kosut and
-    Franklin (ACC 1987) with its rate loop made deadbeat.
+    approach over 1 / settle steps), and the command is the acceleration that reaches
+    that rate in one step (within the torque limit's). This is the proximate
+    time-optimal servo of Workman, Kosut and Franklin (ACC 1987) with its rate loop
+    made deadbeat.
 
     Args:
         inertia: the gimbal's inertia about its hinge [kg m^2].
@@ -148,7 +57,8 @@ class TimeOptimalSlew:
         self.inertia = inertia
         self.limit = limit
         self.Te = Te
-        self.accel = alpha * limit / inertia  # [rad/s^2]
+        self.u_limit = limit / inertia  # the acceleration the torque limit gives [rad/s^2]
+        self.accel = alpha * self.u_limit  # [rad/s^2]
         self.settle = settle
 
     def rate_reference(self, error: float) -> float:
@@ -157,16 +67,16 @@ class TimeOptimalSlew:
         return math.copysign(min(math.sqrt(2.0 * self.accel * e), self.settle * e / self.Te),
                              error)
 
-    def torque(self, q: float, qdot: float, target: float,
-               max_rate: float = math.inf) -> float:
-        """Motor torque [N m] towards encoder angle ``target`` [rad] from angle ``q``
-        [rad] and rate ``qdot`` [rad/s], no faster than ``max_rate`` [rad/s], within the
-        limit."""
+    def command(self, q: float, qdot: float, target: float,
+                max_rate: float = math.inf) -> float:
+        """The input u = phi'' [rad/s^2] (phi = phi_home - q, so q'' = -u) towards
+        encoder angle ``target`` [rad] from angle ``q`` [rad] and rate ``qdot`` [rad/s],
+        no faster than ``max_rate`` [rad/s], within the torque limit."""
         ahead = target - q - qdot * self.Te  # the error one step from now, coasting
         want = self.rate_reference(ahead)
         want = min(max(want, -max_rate), max_rate)
-        tau = self.inertia * (want - qdot) / self.Te
-        return min(max(tau, -self.limit), self.limit)
+        u = (qdot - want) / self.Te
+        return min(max(u, -self.u_limit), self.u_limit)
 
 
 @dataclass
@@ -193,8 +103,11 @@ class FastAcquisition:
     and hands over once the encoder is within ``arrive_tol`` of it at under
     ``arrive_rate``, with a standard error under ``arrive_stderr`` (or under
     ``settle_stderr`` after one memory of the fix at the target, where the light is too
-    weak for better): the estimator
-    restarts from phi = phi_ref + (target - q), phidot = -qdot.
+    weak for better): the estimator restarts from phi = phi_ref + (target - q),
+    phidot = -qdot. Where the light is weaker still, the estimator restarts from the fix
+    on the first arrival (``prime``) and runs on its own with the gimbal at the target,
+    as in the warm-up; after ``patience`` s the stack hands over to it as it is
+    (``kept``) once the fix agrees with its estimate within three standard errors.
 
     Args:
         constants: the link; inertia [kg m^2] and limit [N m]: the gimbal's.
@@ -206,13 +119,21 @@ class FastAcquisition:
         min_samples: samples the fix needs before the gimbal moves on it [-].
         settle_stderr: the fix's standard error under which it hands over after one
             memory at the target even above ``arrive_stderr`` (weak light) [rad].
+        patience: time at the target after which it hands over to an estimate the fix
+            agrees with [s] (the warm-up's 1 s: at 0.2 m the fix never got under
+            ``settle_stderr``, and the link stayed in 'acquiring' for the whole run,
+            held by the fix alone; restarting the estimator from so weak a fix lost the
+            link again within 0.1 s).
+        aim_sigmas: the slew's aim moves to a new fix only when it is this many of the
+            fix's standard errors away [-].
     """
 
     def __init__(self, constants: LinkConstants, inertia: float, limit: float,
                  phi_ref: float, go_stderr: float = 0.1, arrive_stderr: float = 0.006,
                  arrive_tol: float = 0.005, arrive_rate: float = 0.3,
                  dark_time: float = 0.05, creep_rate: float = 1.0, min_samples: int = 1,
-                 settle_stderr: float = 0.018):
+                 settle_stderr: float = 0.018, patience: float = 1.0,
+                 aim_sigmas: float = 2.0):
         self.fix = BeamFix(constants, phi_ref)
         self.slew = TimeOptimalSlew(inertia, limit, constants.Te)
         self.phi_ref = phi_ref
@@ -222,6 +143,11 @@ class FastAcquisition:
         self.creep_rate = creep_rate
         self.min_samples = min_samples
         self.settle_stderr = settle_stderr
+        self.aim_sigmas = aim_sigmas
+        self.aim = None  # the encoder angle the slew goes to [rad]
+        self.kept = False  # the last hand-over kept the estimator's own estimate
+        self.prime = None  # a seed to restart the estimator from while waiting
+        self.patience_steps = max(1, int(round(patience / constants.Te)))
         self.active = False
         #: One :class:`AcquisitionLog` per acquisition, in order.
         self.log: list[AcquisitionLog] = []
@@ -233,6 +159,7 @@ class FastAcquisition:
         self.q_hold = q
         self.dark = 0
         self.moving = False
+        self.aim = None
         self.log.append(AcquisitionLog())
 
     @property
@@ -240,9 +167,10 @@ class FastAcquisition:
         """No usable sample for ``dark_time``: the beam is not in the field of view."""
         return self.dark >= self.dark_steps and not self.moving
 
-    def step(self, y, q: float, qdot: float, noise_std: float):
-        """(torque [N m] or None, seed) for the powers ``y`` [W] at encoder angle ``q``
-        [rad] and rate ``qdot`` [rad/s] with noise ``noise_std`` [W]. torque None: the
+    def step(self, y, q: float, qdot: float, noise_std: float,
+             estimate: float | None = None):
+        """(u [rad/s^2] or None, seed) for the powers ``y`` [W] at encoder angle ``q``
+        [rad] and rate ``qdot`` [rad/s] with noise ``noise_std`` [W]. u None: the
         beam is out of view (the caller scans); seed: (phi [rad], phidot [rad/s]) to
         restart the estimator from on arrival (None: not yet)."""
         seen = self.fix.add(y, q, noise_std)
@@ -252,29 +180,46 @@ class FastAcquisition:
         if seen and log.first_seen is None:
             log.first_seen = log.steps
         target, err = self.fix.target, self.fix.stderr
+        self.prime = None
         if target is None:  # every sample forgotten: start over
             self.moving = False
         if target is None or (not self.moving and self.fix.samples < self.min_samples):
             if self.out_of_view:
                 return None, None
-            return self.slew.torque(q, qdot, self.q_hold), None
+            return self.slew.command(q, qdot, self.q_hold), None
         if not self.moving and err > self.go_stderr:
             # Some evidence, not enough to go: creep towards it, where the light is
             # brighter and each sample tells more.
-            return self.slew.torque(q, qdot, target, self.creep_rate), None
+            return self.slew.command(q, qdot, target, self.creep_rate), None
         if not self.moving:
             log.go = log.steps
         self.moving = True
-        there = abs(target - q) < self.arrive_tol and abs(qdot) < self.arrive_rate
+        # Aim at the fix, but not at its noise: a weak link's fix wanders by its standard
+        # error every sample, and a deadbeat slew chasing it shook the gimbal at
+        # +-1 rad/s (at 0.2 m), which no estimator converges on. Once there on a weak
+        # fix (over settle_stderr), the gimbal holds still until the hand-over (an
+        # outlier of the fix at 0.2 m sent it 0.35 rad off the beam); the hand-over
+        # takes the latest fix.
+        weak_there = log.reached is not None and err > self.settle_stderr
+        if self.aim is None or (not weak_there and
+                                abs(target - self.aim) > self.aim_sigmas * err):
+            self.aim = target
+        there = abs(self.aim - q) < self.arrive_tol and abs(qdot) < self.arrive_rate
         if there and log.reached is None:
             log.reached = log.steps
+            self.prime = (self.phi_ref + (target - q), -qdot)
         # The fix holds one memory's worth of samples: where the light is too weak for
         # them to reach arrive_stderr, waiting longer at the target gains nothing; a fix
-        # worse than settle_stderr even so is not one to hand over on.
-        settled = log.reached is not None and err < self.settle_stderr and \
-            log.steps - log.reached >= self.fix.memory_steps
-        if there and (err < self.arrive_stderr or settled):
+        # worse than settle_stderr even so is not one to hand over on, until the
+        # estimator has had the warm-up's time to converge on its own.
+        waited = -1 if log.reached is None else log.steps - log.reached
+        seed = (self.phi_ref + (target - q), -qdot)
+        settled = err < self.settle_stderr and waited >= self.fix.memory_steps
+        # After patience, the estimator's own estimate, if the fix agrees with it.
+        self.kept = not settled and waited >= self.patience_steps and \
+            estimate is not None and abs(estimate - seed[0]) <= 3 * err
+        if there and (err < self.arrive_stderr or settled or self.kept):
             self.active = False
             log.arrived = log.steps
-            return None, (self.phi_ref + (target - q), -qdot)
-        return self.slew.torque(q, qdot, target), None
+            return None, seed
+        return self.slew.command(q, qdot, self.aim), None

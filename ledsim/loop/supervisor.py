@@ -94,8 +94,7 @@ class LinkSupervisor:
         self.fast = None
         if fast is not None and reacquire:
             self.fast = FastAcquisition(constants, inertia, fast, intensity_maximum(constants))
-        self.scan = AcquisitionScan(constants, inertia,
-                                    **({} if self.fast is None else FAST_SCAN))
+        self.scan = AcquisitionScan(constants, **({} if self.fast is None else FAST_SCAN))
         self.warmup = warmup
         self.reacquire = reacquire
         # Encoder angles of the last trusted steps: a loss is flagged up to about 0.2 s
@@ -165,48 +164,59 @@ class LinkSupervisor:
         fit = scan.fit(noise)
         if fit is not None:
             scan.stop()
-            self.gain.set(fit.gain / self.gain.model_gain)
+            self.gain.refit(fit.gain / self.gain.model_gain)
             # phi = phi_home - q while the hull holds still, so phidot = -qdot.
             est.reset(np.array([fit.phi, -qdot]))
             xhat = est.update(self.gain.normalize(y))
-            self.monitor.reset()
-            self.trusted_q.clear()
-            self.trusted_q.append(q)
+            self._handed_over(q)
             return Decision(xhat, True, reseeded=True, reason="re-seeded")
         if not scan.active:
             scan.start(self.trusted_q[0] if self.trusted_q else q, q)
-        return Decision(xhat, True, True, scan.torque(q, qdot, noise), reason="acquiring")
+        return Decision(xhat, True, True, scan.command(q, qdot, noise), reason="acquiring")
+
+    def _seed_covariance(self) -> np.ndarray:
+        """How sure a restart from the fix is: phi within three of the fix's standard
+        errors (its spread and the pair's model error: at one, an EKF trusted a 1-deg
+        bias for seconds); phidot is the encoder's own."""
+        return np.diag([(3 * self.fast.fix.stderr)**2, SEED_RATE_STD**2])
+
+    def _handed_over(self, q: float) -> None:
+        """The estimate is the link's again, at encoder angle ``q`` [rad]."""
+        self.monitor.reset()
+        self.trusted_q.clear()
+        self.trusted_q.append(q)
 
     def _acquire(self, y, q: float, qdot: float, xhat) -> Decision:
         """A step of the fast acquisition: hold, slew or scan, and the re-seed on arrival."""
         est, scan, fast = self.estimator, self.scan, self.fast
         noise = float(np.mean(self.monitor.noise_std)) * self.gain.ratio
         scan.record(y, q)
-        torque, seed = fast.step(y, q, qdot, noise)
+        u, seed = fast.step(y, q, qdot, noise, float(self._angle(xhat)))
+        if fast.prime is not None and seed is None:  # at the target: converge from there
+            est.reset(np.array(fast.prime), self._seed_covariance())
+            xhat = est.update(self.gain.normalize(y))
         if seed is not None:
             scan.stop()
+            if fast.kept:  # weak light: the estimator's own estimate, which the fix backs
+                self._handed_over(q)
+                return Decision(xhat, True, reseeded=True, reason="acquired")
             if fast.fix.gain is not None and fast.fix.gain > 0:
-                self.gain.set(fast.fix.gain / self.gain.model_gain)
-            # phi within three of the fix's standard errors (its spread and the pair's
-            # model error: at one, an EKF trusted a 1-deg bias for seconds); phidot is
-            # the encoder's own.
-            est.reset(np.array(seed), np.diag([(3 * fast.fix.stderr)**2, SEED_RATE_STD**2]))
+                self.gain.refit(fast.fix.gain / self.gain.model_gain)
+            est.reset(np.array(seed), self._seed_covariance())
             xhat = est.update(self.gain.normalize(y))
-            self.monitor.reset()
-            self.trusted_q.clear()
-            self.trusted_q.append(q)
+            self._handed_over(q)
             return Decision(xhat, True, reseeded=True, reason="acquired")
-        if torque is None:  # the beam is out of view: scan for it
+        if u is None:  # the beam is out of view: scan for it
             fast.q_hold = q
             if not (self.trusted_q or scan.active) and abs(q) > CENTRE_REACHED:
                 # Never seen: the gimbal's centre first, at the torque limit (where a
                 # receiver mounted to face its transmitter most likely finds it).
-                return Decision(xhat, True, True, fast.slew.torque(q, qdot, 0.0),
+                return Decision(xhat, True, True, fast.slew.command(q, qdot, 0.0),
                                 reason="acquiring")
             if not scan.active:  # around the last trusted angle, else the gimbal's centre
                 scan.start(self.trusted_q[0] if self.trusted_q else 0.0, q,
                            dwell=None if self.trusted_q else 0.0)
-            torque = scan.torque(q, qdot, noise)
+            u = scan.command(q, qdot, noise)
         else:
             scan.stop()
-        return Decision(xhat, True, True, torque, reason="acquiring")
+        return Decision(xhat, True, True, u, reason="acquiring")
