@@ -194,15 +194,14 @@ class FastAcquisition:
         if not self.moving:
             log.go = log.steps
         self.moving = True
-        # Aim at the fix, but not at its noise: a weak link's fix wanders by its standard
-        # error every sample, and a deadbeat slew chasing it shook the gimbal at
-        # +-1 rad/s (at 0.2 m), which no estimator converges on. Once there on a weak
-        # fix (over settle_stderr), the gimbal holds still until the hand-over (an
-        # outlier of the fix at 0.2 m sent it 0.35 rad off the beam); the hand-over
-        # takes the latest fix.
-        weak_there = log.reached is not None and err > self.settle_stderr
-        if self.aim is None or (not weak_there and
-                                abs(target - self.aim) > self.aim_sigmas * err):
+        # On the way, aim at every refinement of the fix. At the target, not at its
+        # noise: a weak link's fix wanders by its standard error every sample, and a
+        # deadbeat slew chasing it shook the gimbal at +-1 rad/s (at 0.2 m), which no
+        # estimator converges on; on a weak fix (over settle_stderr) the gimbal holds
+        # still until the hand-over (an outlier of the fix at 0.2 m sent it 0.35 rad
+        # off the beam). The hand-over takes the latest fix.
+        if self.aim is None or log.reached is None or (
+                err <= self.settle_stderr and abs(target - self.aim) > self.aim_sigmas * err):
             self.aim = target
         there = abs(self.aim - q) < self.arrive_tol and abs(qdot) < self.arrive_rate
         if there and log.reached is None:
