@@ -120,3 +120,17 @@ def test_weak_light_still_hands_over_to_the_estimator():
     m = run_once(RunConfig(acquisition="minimum-time", distance=0.12, seconds=3.0), 7).metrics
     assert m.lost_share < 0.3
     assert m.availability > 0.9
+
+
+def test_a_link_too_weak_for_the_fix_acquires_with_the_warm_up(tmp_path):
+    from ledsim.loop.registry import MIN_FAST_PEAK_SNR, peak_snr
+
+    near, far = RunConfig(distance=0.25), RunConfig(distance=0.3)
+    assert peak_snr(far.world_config().constants, 1.0) < MIN_FAST_PEAK_SNR
+    assert near.fast_acquisition and not far.fast_acquisition
+    assert far.scenario_spec.warmup == 1.0 and near.scenario_spec.warmup == 0.0
+    assert RunConfig(distance=0.3, estimator="oracle").fast_acquisition  # needs no light
+    assert not RunConfig(noise_scale=10.0).fast_acquisition
+    r = run_cli("run", "--distance", "0.3", "--seconds", "0.2", "--seeds", "1",
+                "--no-plot", "--out", str(tmp_path / "o"), "-q")
+    assert r.returncode == 0 and "acquires with the warm-up" in r.stderr, r.stderr

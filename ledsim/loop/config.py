@@ -13,14 +13,16 @@ from ..physics.disturbances import check_timing, parse_disturbance
 from ..physics.scene import WorldConfig
 from ..physics.vehicle import StationKeeping
 from ..scenario import Scenario
-from .registry import (  # noqa: F401 (re-exported: the names of the loop's choices)
+from .registry import (  # noqa: F401 (re-exported)
     ACQUISITIONS,
     COMPARED_ESTIMATORS,
     FILTER_DISTANCES,
     LOOP_ESTIMATORS,
     MAX_INITIAL_ANGLE,
+    MIN_FAST_PEAK_SNR,
     OMEGA_MODELS,
     PHYSICS_SCENARIOS,
+    peak_snr,
 )
 
 
@@ -266,10 +268,12 @@ class RunConfig:
 
     @property
     def fast_acquisition(self) -> bool:
-        """The ``minimum-time`` acquisition runs: asked for, supervised, and the
-        scenario's law tracks the beam."""
+        """The ``minimum-time`` acquisition runs: asked for, supervised, the law tracks
+        the beam, and peak SNR >= :data:`MIN_FAST_PEAK_SNR` (but for the oracle)."""
         return (self.acquisition == "minimum-time" and self.supervision
-                and PHYSICS_SCENARIOS[self.scenario].law.tracks_beam)
+                and PHYSICS_SCENARIOS[self.scenario].law.tracks_beam
+                and (self.estimator == "oracle" or peak_snr(
+                    self.world_config().constants, self.noise_scale) >= MIN_FAST_PEAK_SNR))
 
     @property
     def steady_from(self) -> float:

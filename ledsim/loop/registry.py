@@ -12,8 +12,12 @@ paper-closed-loop   start at 0.2 rad; the paper's u = -0.001 phidot_hat
 
 from __future__ import annotations
 
+import functools
+
+from ..config import LinkConstants
 from ..control import AlignmentPID, Excitation, PaperRateDamping
 from ..estimators import ESTIMATORS
+from ..optics import peak_power
 from ..scenario import Scenario
 
 PHYSICS_SCENARIOS = {
@@ -42,3 +46,18 @@ ACQUISITIONS = ("warm-up", "minimum-time")
 #: Largest |initial angle| [rad] a run may start at: the LED must stay in front of the
 #: photodiodes (|phi| < pi/2 with the photodiodes' offset to spare).
 MAX_INITIAL_ANGLE = 1.4
+
+#: Below this peak signal-to-noise ratio (the most one photodiode can see over the
+#: noise's standard deviation) the pair of powers fixes the beam too poorly for the
+#: ``minimum-time`` acquisition, and a run that asks for it acquires with the warm-up:
+#: on ``docs/distance_grid.md``'s grid the fix lost to the warm-up from 0.26 m
+#: (peak SNR 3.4; KKL 0.663 against 0.769, EKF 0.774 against 0.840) and beat it up to
+#: 0.25 m (3.7; 0.855 against 0.729, 0.962 against 0.840) [-].
+MIN_FAST_PEAK_SNR = 3.5
+
+
+@functools.lru_cache(maxsize=64)
+def peak_snr(constants: LinkConstants, noise_scale: float) -> float:
+    """The most one photodiode can see at the configured distance over the noise's
+    standard deviation, nominal times ``noise_scale`` [-]."""
+    return peak_power(constants) / (constants.measurement_noise_std * noise_scale)
