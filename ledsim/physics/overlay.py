@@ -76,8 +76,10 @@ class Overlay:
         bottom = self.h - 8 - self.font_px  # room for the time axis labels
         boxes = [(8 + 4 * self.font_px, y0 + 22, half - 8, bottom),
                  (half + 8 + 4 * self.font_px, y0 + 22, self.w - 8, bottom)]
-        shown = [self.phi, self.phihat] if self.estimate else [self.phi]
-        lim_phi = axis_limits(np.concatenate([list(q) for q in shown]), (-0.5, 0.5), 0.5)
+        # Scaled to the true angle: an estimate not yet handed over (a minimum-time
+        # acquisition's first 0.2 s) swings by radians and flattened the rest; it is
+        # clipped at the panel's edge instead.
+        lim_phi = axis_limits(np.asarray(list(self.phi)), (-0.5, 0.5), 0.5)
         lim_p = axis_limits(np.concatenate([list(self.p1), list(self.p2)]),
                             (-0.1 * peak_power, 1.1 * peak_power), 0.5 * peak_power)
         self._axes(d, boxes[0], lim_phi, "{:+.1f}", zero=True)
