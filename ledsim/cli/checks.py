@@ -43,15 +43,14 @@ def _warn_unserved(cfg) -> None:
     """Say so when the shipped KKL runs at a distance it is not measured to serve, and
     when the link is too weak for the minimum-time acquisition it asks for."""
     from ..loop.estimation import SERVED_DISTANCES, served
-    from ..loop.registry import MIN_FAST_PEAK_SNR, peak_snr
+    from ..loop.registry import PHYSICS_SCENARIOS
 
     if not served(cfg):
         lo, hi = SERVED_DISTANCES
         log.warning(f"--distance {cfg.distance:g} is outside the {lo:g}-{hi:g} m the shipped "
                     "KKL is measured to serve: its results are not vouched for "
                     "(results.json: distance_served false)")
-    weak = cfg.estimator != "oracle" and peak_snr(cfg.world_config().constants,
-                                                  cfg.noise_scale) < MIN_FAST_PEAK_SNR
-    if cfg.acquisition == "minimum-time" and cfg.supervision and weak:
+    if cfg.acquisition == "minimum-time" and cfg.supervision and \
+            PHYSICS_SCENARIOS[cfg.scenario].law.tracks_beam and not cfg.fast_acquisition:
         log.warning("the link is too weak for the minimum-time acquisition's fix (peak "
                     "SNR under 3.5): this run acquires with the warm-up")

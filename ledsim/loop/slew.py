@@ -204,15 +204,15 @@ class FastAcquisition:
                 err <= self.settle_stderr and abs(target - self.aim) > self.aim_sigmas * err):
             self.aim = target
         there = abs(self.aim - q) < self.arrive_tol and abs(qdot) < self.arrive_rate
+        seed = (self.phi_ref + (target - q), -qdot)
         if there and log.reached is None:
             log.reached = log.steps
-            self.prime = (self.phi_ref + (target - q), -qdot)
+            self.prime = seed
         # The fix holds one memory's worth of samples: where the light is too weak for
         # them to reach arrive_stderr, waiting longer at the target gains nothing; a fix
         # worse than settle_stderr even so is not one to hand over on, until the
         # estimator has had the warm-up's time to converge on its own.
         waited = -1 if log.reached is None else log.steps - log.reached
-        seed = (self.phi_ref + (target - q), -qdot)
         settled = err < self.settle_stderr and waited >= self.fix.memory_steps
         # After patience, the estimator's own estimate, if the fix agrees with it.
         self.kept = not settled and waited >= self.patience_steps and \
