@@ -32,11 +32,12 @@ def shipped_checkpoint(distance: float, world: str = "closed-form",
         world: ``"closed-form"`` (trained on the paper's model) or ``"mujoco"``
             (trained on transitions of the MuJoCo world).
         design: ``"default"``, or ``"paper"`` or ``"slow"`` (closed-form only), or
-            ``"scheduled"`` (the gain-scheduled KKL, MuJoCo only).
+            ``"scheduled"`` (the gain-scheduled KKL).
         noise: measurement noise it was trained for, over the nominal [-] (MuJoCo
             observers of the bank that serves weak links).
     """
-    prefix = {"closed-form": {"default": "kkl", "paper": "kkl_paper", "slow": "kkl_slow"},
+    prefix = {"closed-form": {"default": "kkl", "paper": "kkl_paper", "slow": "kkl_slow",
+                              "scheduled": "kkl_scheduled"},
               "mujoco": {"default": "kkl_mujoco", "scheduled": "kkl_mujoco_scheduled"}
               }[world][design]
     suffix = "" if noise == 1.0 else f"_noise{noise:g}"
@@ -48,7 +49,9 @@ def require_shipped_checkpoint(distance: float, world: str = "closed-form",
     """:func:`shipped_checkpoint`, or a :class:`LedsimError` that says how to train one."""
     path = shipped_checkpoint(distance, world, design, noise)
     if not path.is_file():
-        how = (f"`ledsim train --distance {distance:g} --out PATH`" if world == "closed-form"
+        flag = "" if design == "default" else f" --design {design}"
+        how = (f"`ledsim train --distance {distance:g}{flag} --out PATH`"
+               if world == "closed-form"
                else f"`ledsim train --world mujoco --distance {distance:g} "
                f"--noise-scale {noise:g} --out PATH`")
         kind = "checkpoint" if world == "closed-form" else "MuJoCo observer"

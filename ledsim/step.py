@@ -96,6 +96,11 @@ class Unsupervised:
     #: The powers reach the estimator as they are (a link supervisor rescales them).
     gain_ratio = 1.0
 
+    @property
+    def outside_domain(self) -> bool:
+        """The estimator's :attr:`~observer.estimator.Estimator.outside_domain`."""
+        return self.estimator.outside_domain
+
     def step(self, t: float, y: np.ndarray, q: float, qdot: float) -> Decision:
         xhat = self.estimator.update(y)
         if self.slew is None:

@@ -53,6 +53,11 @@ class ObserverBank(Estimator):
     def current(self) -> Estimator:
         return self.members[self.active]
 
+    @property
+    def outside_domain(self) -> bool:
+        """The running member's flag (:attr:`Estimator.outside_domain`)."""
+        return self.current.outside_domain
+
     def nearest(self, noise_ratio: float) -> int:
         """Index of the member whose design noise is nearest ``noise_ratio`` (in log)."""
         logs = [math.log(r) for r in self.noise_ratios]

@@ -23,9 +23,20 @@ class Estimator(ABC):
     """A recursive state estimator for a :class:`DiscreteSystem`."""
 
     name: str = "estimator"
+    #: Whether the last estimate, or the state the last input drove the model to
+    #: (f(x_hat, u), what the input correction encodes), lies outside the system's
+    #: training box: a learned observer's maps then extrapolate. Only the KKL family
+    #: has maps to leave; the filters' stays False.
+    outside_domain: bool = False
 
     def __init__(self, system: DiscreteSystem):
         self.system = system
+
+    def in_domain(self, x) -> bool:
+        """Whether the state ``x`` (n_state,) lies inside the system's training box."""
+        return all(lo <= v <= hi for v, lo, hi in zip(
+            np.asarray(x, dtype=float).tolist(), self.system.domain_low.tolist(),
+            self.system.domain_high.tolist(), strict=True))
 
     @abstractmethod
     def reset(self, x0: np.ndarray | None = None,

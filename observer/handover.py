@@ -38,6 +38,11 @@ class HandoverKKL(Estimator):
         self.handover_steps = int(handover_steps)
         self.k = 0
 
+    @property
+    def outside_domain(self) -> bool:
+        """The flag of the half whose estimate is given (:attr:`Estimator.outside_domain`)."""
+        return (self.fast if self.k <= self.handover_steps else self.slow).outside_domain
+
     def seed_run(self, seed: int) -> None:
         self.fast.seed_run(seed)
         self.slow.seed_run(seed)

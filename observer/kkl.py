@@ -161,10 +161,12 @@ class KKLObserver(Estimator):
         self.z = self.encode(self.initial_guess(x0))
         self._y = None
         self._xhat = None
+        self.outside_domain = False
 
     def update(self, y) -> np.ndarray:
         y = np.asarray(y, dtype=float)
         self._xhat = self.decoder_T_star.vector(self.z)
+        self.outside_domain = not self.in_domain(self._xhat)
         ok = usable_mask(self.system, y)
         if not ok.all():
             # Hold the prediction: a missing power is replaced by h(x_hat).
@@ -178,7 +180,9 @@ class KKLObserver(Estimator):
             np.any(np.asarray(u, dtype=float) != self.u_bar)
         if self.use_omega and moved:  # single-sample Omega: matrix-vector products only
             f, enc, xh = self.system.f, self.encoder_T.vector, self._xhat
-            z_next = z_next + enc(f(xh, u)) - enc(f(xh, self.u_bar))
+            driven = f(xh, u)
+            self.outside_domain = self.outside_domain or not self.in_domain(driven)
+            z_next = z_next + enc(driven) - enc(f(xh, self.u_bar))
         self.z = z_next
 
     # -- many trajectories of the autonomous observer ---------------------------------

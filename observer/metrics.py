@@ -24,3 +24,17 @@ def mean_and_spread(values: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     values = np.asarray(values, dtype=float)
     spread = values.std(axis=0, ddof=1) if len(values) > 1 else np.zeros_like(values[0])
     return values.mean(axis=0), spread
+
+
+def pointing_loss_db(allowed, received, mask=None) -> float:
+    """The mean pointing loss [dB]: 10 log10 of the power the geometry allows over the
+    power received, each summed over the steps in ``mask`` (None: all), so a deep fade
+    weighs by the power it lost rather than by its decibels. 0 for a perfect pointing;
+    inf when nothing was received; NaN without a step."""
+    a, r = np.asarray(allowed, dtype=float), np.asarray(received, dtype=float)
+    if mask is not None:
+        a, r = a[mask], r[mask]
+    if a.size == 0:
+        return float("nan")
+    total = float(np.sum(r))
+    return float("inf") if total <= 0 else float(10.0 * np.log10(np.sum(a) / total))

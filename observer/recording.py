@@ -79,6 +79,10 @@ class RecordingEstimator(Estimator):
     def __getattr__(self, name):  # only for what this class does not define
         return getattr(self.inner, name)
 
+    @property
+    def outside_domain(self) -> bool:
+        return self.inner.outside_domain
+
     def seed_run(self, seed: int) -> None:
         self.record.add("seed_run", [seed])
         self.inner.seed_run(seed)

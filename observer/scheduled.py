@@ -170,11 +170,13 @@ class ScheduledKKL(Estimator):
         self._wide = False
         self._gain(self.clip(self.schedule.gain(0.0, self.noise)))
         self._xhat, self._y = None, None
+        self.outside_domain = False
         self.z = self._enc(self.initial_guess(x0), self.w)
 
     def update(self, y) -> np.ndarray:
         y = np.asarray(y, dtype=float)
         self._xhat = self._estimate()
+        self.outside_domain = not self.in_domain(self._xhat)
         ok = usable_mask(self.system, y)
         if not ok.all():  # hold the prediction: a missing power is replaced by h(x_hat)
             y = np.where(ok, y, self.system.h(self._xhat))
@@ -187,7 +189,9 @@ class ScheduledKKL(Estimator):
         moved = np.any(np.asarray(u, dtype=float) != self.u_bar)
         if self.use_omega and moved:
             f, xh = self.system.f, self._xhat
-            z = z + self._enc(f(xh, u), self.w) - self._enc(f(xh, self.u_bar), self.w)
+            driven = f(xh, u)
+            self.outside_domain = self.outside_domain or not self.in_domain(driven)
+            z = z + self._enc(driven, self.w) - self._enc(f(xh, self.u_bar), self.w)
         self.z = z
         self.k += 1
         if self._wide:  # no slowing down while the estimate is outside the locked box

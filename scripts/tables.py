@@ -1,5 +1,6 @@
 """Regenerate the paper's Table 1 (four scenarios at d = 0.085 m) or Table 2 (IF1, IF2,
-closed loop at d = 0.085, 0.1, 0.2 m) with KKL, the paper-literal KKL, EKF, UKF and PF.
+closed loop at d = 0.085, 0.1, 0.2 m) with KKL, the paper-literal KKL, the gain-scheduled
+KKL, EKF, UKF and PF, each against the posterior Cramér-Rao bound.
 
     python scripts/tables.py table1        # about 5 minutes on 2 cores
     python scripts/tables.py table2        # about 10 minutes
@@ -36,12 +37,18 @@ def main() -> None:
              "steady-state window (from step 1000 of 2000, after the transient from the "
              f"initial guess; mean over {args.seeds} noise seeds), x1's RMSE over the whole "
              "run (transient included), the share of 100 random initial guesses that "
-             "converge, and the ratio of KKL's steady-state RMSE to the particle filter's. "
+             "converge, the ratio of KKL's steady-state RMSE to the particle filter's, "
+             "each estimator's steady RMSE over the posterior Cramér-Rao bound (the root "
+             "of the seeds' mean square error over the root of the bound's mean over the "
+             "window, along that estimator's own runs; ± one Monte-Carlo standard error; "
+             "`observer/pcrb.py`), and the mean pointing loss of a receiver pointed by "
+             "the estimate [dB]. The PCRB row gives the bound's root. "
              "The paper does not say which window its RMSE uses; its rows are "
              f"{args.table.replace('table', 'Table ')}'s own values.", "",
              "| scenario | d [m] | estimator | x1 [rad] | x2 [rad/s] | y1 [W] | y2 [W] "
-             "| x1 whole run [rad] | converged | KKL/PF x1 | KKL/PF x2 |",
-             "|---|---|---|---|---|---|---|---|---|---|---|"]
+             "| x1 whole run [rad] | converged | KKL/PF x1 | KKL/PF x2 | x1/PCRB "
+             "| x2/PCRB | pointing loss [dB] |",
+             "|---|---|---|---|---|---|---|---|---|---|---|---|---|---|"]
     for scenario, d in CASES[args.table]:
         cfg = EvaluationConfig(scenario=scenario, distance=d, seeds=args.seeds,
                                starts=args.starts)
@@ -49,22 +56,29 @@ def main() -> None:
         write_outputs(result, ROOT / "out" / args.table / f"{scenario}_d{d:g}")
         est = result.estimators
         ratios = {n: [est[n].rmse_steady[k] / est["pf"].rmse_steady[k] for k in KEYS[:2]]
-                  for n in ("kkl", "kkl-handover") if n in est}
+                  for n in ("kkl", "kkl-handover", "kkl-scheduled") if n in est}
         ratio = ratios["kkl"]
         for name, e in est.items():
             conv = e.converged_fraction
             cells = " | ".join(f"{e.rmse_steady[k]:.2e}" for k in KEYS)
             r = ratios.get(name)
             extra = f" | {r[0]:.2f} | {r[1]:.2f}" if r else " | |"
+            bound = " | ".join(f"{e.rmse_over_pcrb[k]:.2f} ± {e.rmse_over_pcrb_err[k]:.2f}"
+                               for k in KEYS[:2])
             lines.append(f"| {scenario} | {d:g} | {name} | {cells} | {e.rmse['x1']:.2e} | "
-                         f"{'-' if conv is None else f'{100 * conv:.0f}%'}{extra} |")
+                         f"{'-' if conv is None else f'{100 * conv:.0f}%'}{extra} | {bound} "
+                         f"| {e.pointing_loss_db:.2g} |")
+        pf = est["pf"]
+        lines.append(f"| {scenario} | {d:g} | PCRB (root, along pf's runs) | "
+                     f"{pf.pcrb_steady_x1:.2e} | {pf.pcrb_steady_x2:.2e} | | | | | | | 1 | 1 "
+                     "| |")
         p = paper_reference(scenario, d, table=int(args.table[-1]))
         if p:
             lines.append(f"| {scenario} | {d:g} | paper ({p['source']}) | " +
-                         " | ".join(f"{p[k]:.2e}" for k in KEYS) + " | | | | |")
+                         " | ".join(f"{p[k]:.2e}" for k in KEYS) + " | | | | | | | |")
         print(json.dumps({"scenario": scenario, "d": d, "kkl/pf": ratio,
-                          **({"kkl-handover/pf": ratios["kkl-handover"]}
-                             if "kkl-handover" in ratios else {})}))
+                          **{f"{n}/pf": ratios[n] for n in ("kkl-handover", "kkl-scheduled")
+                             if n in ratios}}))
     atomic_write_text(ROOT / "docs" / f"{args.table}.md", "\n".join(lines) + "\n")
     print("\n".join(lines))
 

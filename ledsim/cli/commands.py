@@ -173,7 +173,9 @@ def evaluate(args) -> int:
     cfg = EvaluationConfig(scenario=args.scenario, distance=args.distance,
                            dphi=math.radians(args.dphi), seeds=args.seeds,
                            starts=args.starts, particles=args.particles,
-                           checkpoint=args.checkpoint, workers=args.workers)
+                           checkpoint=args.checkpoint, workers=args.workers,
+                           **({"estimators": tuple(dict.fromkeys(args.estimators))}
+                              if args.estimators else {}))
     out = check_out_dir(args.out)
     t0 = time.perf_counter()
     result = evaluate(cfg, progress=not args.quiet)

@@ -49,6 +49,7 @@ class _Help(argparse.ArgumentDefaultsHelpFormatter):
 
 def build_parser() -> argparse.ArgumentParser:
     from .. import __version__
+    from ..paper.evaluate import CLOSED_FORM_ESTIMATORS
     from ..paper.scenarios import PAPER_SCENARIOS
     from ..physics.simulation import TORQUE_PROFILES
     from ..presets import PRESETS
@@ -84,6 +85,11 @@ def build_parser() -> argparse.ArgumentParser:
     ev.add_argument("--particles", type=number(0, 1_000_000, integer=True), default=5000,
                     help="particle-filter size")
     ev.add_argument("--checkpoint", help="KKL checkpoint (default: the shipped one for d)")
+    ev.add_argument("--estimator", dest="estimators", action="append",
+                    **choices(CLOSED_FORM_ESTIMATORS),
+                    help="run only this estimator (repeat for several; default: kkl, "
+                         "kkl-paper, kkl-handover, kkl-scheduled where shipped, ekf, ukf, "
+                         "pf)")
     ev.add_argument("--workers", type=WORKERS, default=X.workers, help="processes")
     ev.add_argument("--out", required=True, help="output folder")
 

@@ -142,6 +142,10 @@ class LoopRun:
         self.applied = np.empty(steps)
         self.xhat = np.empty((steps, nx))
         self.flags = np.zeros((steps, 2), dtype=bool)  # lost, acquiring
+        # What the estimator was told and given (for the bound): u [rad/s^2], samples.
+        self.u = np.zeros(steps)
+        self.measured = np.ones((steps, npd), dtype=bool)
+        self.outside = np.zeros(steps, dtype=bool)  # the estimator left its training box
         # The vehicle's navigated position [m] and its station (None: no vehicle).
         self.navigated = np.full((steps, 3), np.nan)
         v = self.vehicle
@@ -165,6 +169,9 @@ class LoopRun:
         d = self.step.decision
         self.xhat[k] = d.xhat
         self.flags[k] = d.lost, d.acquiring
+        self.u[k] = self.step.u
+        self.measured[k] = np.isfinite(self.step.y_gated)
+        self.outside[k] = self.step.supervisor.outside_domain
         if self.given is not None:
             self.given.take(k, self.step, los)
         return torque
@@ -256,7 +263,8 @@ class ClosedLoop:
                         Navigation(run.hull, run.station, run.navigated), window,
                         run.vehicle is not None and run.vehicle.station_keeping,
                         None if run.given is None else
-                        run.given.series(run.step.estimator, self.cfg), run.noise)
+                        run.given.series(run.step.estimator, self.cfg), run.noise,
+                        (self.model, run.u, run.measured), run.outside)
                 for i, run in enumerate(runs)]
 
 

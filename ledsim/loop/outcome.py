@@ -7,11 +7,14 @@ from typing import NamedTuple
 
 import numpy as np
 
+from observer.pcrb import BoundError
+
 from .. import optics
 from ..config import LinkConstants
 from ..control import receiver_peak
 from ..layout import ReceiverLayout
 from ..results import DictAccess
+from .bound import run_terms
 from .config import RunConfig
 from .metrics import RunMetrics, run_metrics
 from .windows import WindowMetrics, horizontal_rms, window_metrics
@@ -60,7 +63,9 @@ class RunOutcome(DictAccess):
     """One seed: its metrics, the estimator's cost [us per step], the loop's real-time
     factor [-], the trace when asked for, the metrics of each window when asked for
     (:class:`~ledsim.loop.windows.WindowMetrics`), and whether the vehicle kept station
-    (False: it drifted, or the scene has no vehicle)."""
+    (False: it drifted, or the scene has no vehicle), and the terms of its posterior
+    Cramér-Rao bound (:func:`ledsim.loop.bound.run_terms`; None: the model has no process
+    noise)."""
 
     metrics: RunMetrics
     us_per_step: float
@@ -68,6 +73,7 @@ class RunOutcome(DictAccess):
     trace: Trace | None = None
     windows: list[WindowMetrics] | None = None
     station_keeping: bool | None = None
+    bound: dict | None = None
 
 
 class Navigation(NamedTuple):
@@ -93,22 +99,35 @@ def outcome(res, xhat: np.ndarray, flags: np.ndarray, cfg: RunConfig, constants,
             disturbances, supervised: bool, spent: float, wall: float,
             keep_trace: bool, navigation: Navigation | None = None,
             window: float | None = None, station_keeping: bool | None = None,
-            given: dict | None = None, noise=None) -> RunOutcome:
+            given: dict | None = None, noise=None, bound_inputs=None,
+            outside: np.ndarray | None = None) -> RunOutcome:
     """A run's :class:`RunOutcome` from its simulation result, its estimates, its
     (lost, acquiring) flags per step, the seconds spent controlling and in all, its
     vehicle's :class:`Navigation` (None: no vehicle) and the window [s] of per-window
     metrics (None: none). ``noise``: the run's measurement noise (None: the link's at
-    the run's noise scale)."""
+    the run's noise scale). ``bound_inputs``: (the estimators' model, the input u each
+    step told them [rad/s^2], the samples the gate passed) for the bound (None: none);
+    ``outside``: the steps whose estimator was outside its training box (None: none)."""
     events = [d for d in disturbances if d.event_end is not None]
     flags = flags.reshape(-1, 2)
     best = achievable_power(res, constants)
-    noise = (constants.measurement_noise(cfg.noise_scale) if noise is None else noise).std
+    noise = constants.measurement_noise(cfg.noise_scale) if noise is None else noise
+    bound = None
+    if bound_inputs is not None and len(res.t):
+        model, u, measured = bound_inputs
+        try:
+            bound = run_terms(res, u, measured, model, constants, noise)
+        except BoundError:
+            bound = None  # no process noise: the bound is not defined
+    noise = noise.std
     metrics = run_metrics(res.x, xhat, res.power_clean, cfg.steady_from,
                           constants, events[0].event_end if events else None,
                           lost=flags[:, 0] if supervised else None,
                           event_start=events[0].start if events else None,
                           power_max=best, noise_std=noise,
-                          warmup=cfg.scenario_spec.warmup)
+                          warmup=cfg.scenario_spec.warmup,
+                          occluded=constants.layout.reference_power(res.occluded),
+                          outside=outside)
     nav = navigation
     if nav is not None and len(res.t):
         metrics.hull_error_rms = horizontal_rms(nav.hull, nav.station)
@@ -121,4 +140,4 @@ def outcome(res, xhat: np.ndarray, flags: np.ndarray, cfg: RunConfig, constants,
                   constants.layout) if keep_trace else None
     return RunOutcome(metrics, 1e6 * spent / len(res.t) if len(res.t) else 0.0,
                       res.t[-1] / wall if len(res.t) else 0.0, trace, windows,
-                      station_keeping)
+                      station_keeping, bound)

@@ -16,6 +16,7 @@ from ..montecarlo import run_jobs
 from ..outputs import atomic_write_bytes
 from ..physics.disturbances import parse_disturbance
 from ..results import DictAccess, write_json
+from .bound import bound_summary
 from .closed_loop import RunOutcome, Trace, check_checkpoint, run_batch
 from .config import RunConfig
 from .estimation import served
@@ -50,7 +51,14 @@ class RunSummary(DictAccess):
     encoder, ``station_keeping`` whether the vehicle held its pose; ``hull_error_rms``
     and ``navigation_error_rms`` [m] are the hull's horizontal distance from its station
     and the navigation's horizontal error (None without a vehicle); ``windows`` (with
-    ``--window``) the metrics of each window over the seeds."""
+    ``--window``) the metrics of each window over the seeds; ``pointing_loss_db`` the
+    mean pointing loss [dB] and ``outside_domain_share`` the share of the run the
+    estimator was outside its training box (:class:`~ledsim.loop.metrics.RunMetrics`);
+    ``pcrb_steady_x1`` [rad] and ``pcrb_steady_x2`` [rad/s] the root of the posterior
+    Cramér-Rao bound over the steady window, along the seeds' true trajectories, and
+    ``rmse_over_pcrb_x1``/``_x2`` the steady RMSE over it, with one Monte-Carlo standard
+    error in ``rmse_over_pcrb_err_x1``/``_x2`` (:mod:`ledsim.loop.bound`; none for the
+    oracle, which reads the true state)."""
 
     scenario: str
     estimator: str
@@ -89,6 +97,14 @@ class RunSummary(DictAccess):
     hull_error_rms: Stat | None = None
     navigation_error_rms: Stat | None = None
     windows: list | None = None
+    pointing_loss_db: Stat | None = None
+    outside_domain_share: Stat | None = None
+    pcrb_steady_x1: float | None = None
+    pcrb_steady_x2: float | None = None
+    rmse_over_pcrb_x1: float | None = None
+    rmse_over_pcrb_x2: float | None = None
+    rmse_over_pcrb_err_x1: float | None = None
+    rmse_over_pcrb_err_x2: float | None = None
 
 
 #: The per-window metrics a summary gives over the seeds (:class:`WindowMetrics`).
@@ -142,7 +158,11 @@ def summarize(cfg: RunConfig, outs: list[RunOutcome]) -> RunSummary:
         realtime_factor=stat(lambda o: o.realtime_factor),
         hull_error_rms=stat(lambda o: o.metrics.hull_error_rms),
         navigation_error_rms=stat(lambda o: o.metrics.navigation_error_rms),
-        windows=summarize_windows(outs))
+        windows=summarize_windows(outs),
+        pointing_loss_db=stat(lambda o: o.metrics.pointing_loss_db),
+        outside_domain_share=stat(lambda o: o.metrics.outside_domain_share),
+        **bound_summary(outs, int(round(cfg.steady_from / cfg.world_config().constants.Te)),
+                        estimates=cfg.estimator != "oracle"))
 
 
 def _job(args) -> RunOutcome:

@@ -105,6 +105,12 @@ class LinkSupervisor:
         self._started = False
 
     @property
+    def outside_domain(self) -> bool:
+        """The estimator says its estimate or its input left its training box
+        (:attr:`~observer.estimator.Estimator.outside_domain`)."""
+        return self.estimator.outside_domain
+
+    @property
     def gain_ratio(self) -> float:
         """The link's gain over the model's that the powers are divided by [-]."""
         return float(self.gain.ratio)

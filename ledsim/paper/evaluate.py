@@ -21,11 +21,15 @@ from ..montecarlo import run_jobs
 from ..outputs import atomic_write_text
 from ..resources import require_shipped_checkpoint, shipped_checkpoint
 from ..results import DictAccess, write_json
+from .bound import bound_stats, bound_terms, pointing_loss
 from .model import LEDLinkModel
 from .scenarios import PAPER_TABLE1, PAPER_TABLE2, Noise, Trajectory, get_scenario, run
 
 CONVERGENCE_TOLERANCE = 0.02  # rad: steady-state x1 RMSE below this counts as converged
 KEYS = ("x1", "x2", "y1", "y2")
+#: What ``ledsim evaluate --estimator`` may run (the oracle has nothing to estimate here).
+CLOSED_FORM_ESTIMATORS = ("kkl", "kkl-paper", "kkl-handover", "kkl-scheduled", "ekf",
+                          "ukf", "pf")
 #: Random initial guesses of the convergence share are drawn from this seed.
 STARTS_SEED = 12345
 
@@ -47,7 +51,8 @@ class EvaluationConfig:
     particles: int = 5000
     checkpoint: str | None = None
     workers: int = 2
-    estimators: tuple[str, ...] = ("kkl", "kkl-paper", "kkl-handover", "ekf", "ukf", "pf")
+    estimators: tuple[str, ...] = ("kkl", "kkl-paper", "kkl-handover", "kkl-scheduled",
+                                   "ekf", "ukf", "pf")
 
     def validate(self) -> None:
         get_scenario(self.scenario)
@@ -58,6 +63,10 @@ class EvaluationConfig:
         for flag, value, ok, allowed in checks:
             if not (ok and math.isfinite(value)):
                 raise LedsimError(f"{flag} {value!r} is not allowed: must be {allowed}")
+        for name in self.estimators:
+            if name not in CLOSED_FORM_ESTIMATORS:
+                raise LedsimError(f"--estimator {name!r} is not allowed here: choose one "
+                                  f"of {', '.join(CLOSED_FORM_ESTIMATORS)}")
         if self.dphi == 0:
             raise LedsimError("--dphi 0 is not allowed: the two photodiodes must point in "
                               "different directions")
@@ -65,7 +74,16 @@ class EvaluationConfig:
 
 @dataclass
 class EstimatorResult(DictAccess):
-    """Monte-Carlo statistics of one estimator (RMSE keyed by x1, x2, y1, y2)."""
+    """Monte-Carlo statistics of one estimator (RMSE keyed by x1, x2, y1, y2).
+
+    ``pcrb_steady_x1`` [rad] and ``pcrb_steady_x2`` [rad/s]: the root of the posterior
+    Cramér-Rao bound's mean over the steady window, along this estimator's own true
+    trajectories and inputs (:mod:`observer.pcrb`); ``rmse_over_pcrb`` (keyed x1, x2):
+    the root of the seeds' steady mean square error over it, with one Monte-Carlo
+    standard error in ``rmse_over_pcrb_err``; ``pointing_loss_db``: the mean pointing
+    loss over the steady window of a receiver pointed by the estimate
+    (:func:`pointing_loss`) [dB].
+    """
 
     rmse: dict
     rmse_std: dict
@@ -73,6 +91,11 @@ class EstimatorResult(DictAccess):
     rmse_steady_std: dict
     converged_fraction: float | None
     us_per_step: float
+    pcrb_steady_x1: float | None = None
+    pcrb_steady_x2: float | None = None
+    rmse_over_pcrb: dict | None = None
+    rmse_over_pcrb_err: dict | None = None
+    pointing_loss_db: float | None = None
 
 
 @dataclass
@@ -92,9 +115,11 @@ class EvaluationResult(DictAccess):
 
 
 def _estimator_names(cfg: EvaluationConfig, distance: float) -> list[str]:
-    """``kkl-paper`` and ``kkl-handover`` only when their checkpoints are shipped and no
-    custom KKL is given."""
-    extra = {"kkl-paper": "paper", "kkl-handover": "slow"}
+    """``kkl-paper``, ``kkl-handover`` and ``kkl-scheduled`` only when their checkpoints
+    are shipped and no custom KKL is given, unless asked for by name alone."""
+    extra = {"kkl-paper": "paper", "kkl-handover": "slow", "kkl-scheduled": "scheduled"}
+    if cfg.estimators != EvaluationConfig.estimators:
+        return list(cfg.estimators)  # asked for: a missing checkpoint is an error
     return [n for n in cfg.estimators if n not in extra or (
         cfg.checkpoint is None and default_checkpoint(distance, extra[n]).is_file())]
 
@@ -106,6 +131,8 @@ def _checkpoint(name: str, cfg: EvaluationConfig, distance: float):
         return default_checkpoint(distance, "paper")
     if name == "kkl-handover":
         return require_shipped_checkpoint(distance)
+    if name == "kkl-scheduled":
+        return require_shipped_checkpoint(distance, design="scheduled")
     return None
 
 
@@ -120,11 +147,15 @@ def _job(args):
         "rmse_steady": np.r_[rmse(out.xhat, out.x, s), rmse(out.yhat, out.y_clean, s)],
         "converged": converged(out.xhat, out.x, s, CONVERGENCE_TOLERANCE),
         "us_per_step": 1e6 * out.seconds / len(out.x),
+        "pointing_loss_db": pointing_loss(system, out.x[s:], out.xhat[s:]),
     }
+    if x0_guess is None:  # a seed of the table (not a random start): the bound's terms
+        metrics["bound"] = bound_terms(system, out).to_arrays()
     return metrics, (out if keep else None)
 
 
-def _summarise(seed_metrics: list[dict], start_metrics: list[dict]) -> EstimatorResult:
+def _summarise(seed_metrics: list[dict], start_metrics: list[dict], system=None,
+               steady: int = 0) -> EstimatorResult:
     stats = {}
     for key in ("rmse", "rmse_steady"):
         mean, spread = mean_and_spread([m[key] for m in seed_metrics])
@@ -132,8 +163,11 @@ def _summarise(seed_metrics: list[dict], start_metrics: list[dict]) -> Estimator
         stats[key + "_std"] = dict(zip(KEYS, spread.tolist(), strict=True))
     conv = (float(np.mean([m["converged"] for m in start_metrics])) if start_metrics
             else None)
+    if system is not None:
+        stats.update(bound_stats(seed_metrics, system, steady))
     return EstimatorResult(**stats, converged_fraction=conv, us_per_step=float(
-        np.median([m["us_per_step"] for m in seed_metrics])))
+        np.median([m["us_per_step"] for m in seed_metrics])), pointing_loss_db=float(
+        np.mean([m["pointing_loss_db"] for m in seed_metrics])))
 
 
 def evaluate(cfg: EvaluationConfig, constants: LinkConstants | None = None,
@@ -164,7 +198,8 @@ def evaluate(cfg: EvaluationConfig, constants: LinkConstants | None = None,
         seed_out = outputs[i:i + cfg.seeds]
         start_out = outputs[i + cfg.seeds:i + cfg.seeds + cfg.starts]
         i += cfg.seeds + cfg.starts
-        result.estimators[n] = _summarise([m for m, _ in seed_out], [m for m, _ in start_out])
+        result.estimators[n] = _summarise([m for m, _ in seed_out], [m for m, _ in start_out],
+                                          system, result.steady_from)
         result.traces[n] = seed_out[0][1]
     return result
 
@@ -189,22 +224,31 @@ def paper_reference(scenario: str, distance: float, table: int | None = None) ->
 
 
 def markdown_table(result: EvaluationResult) -> str:
-    """RMSE table (mean +- std over seeds) beside the paper's value."""
+    """RMSE table (mean +- std over seeds) beside the paper's value, with each
+    estimator's steady RMSE over the posterior Cramér-Rao bound and its pointing loss."""
     lines = [f"### {result.scenario}, d = {result.distance:g} m, "
              f"{result.seeds} seeds (steady state from step {result.steady_from} "
              f"of {result.n_steps})", "",
              "| estimator | x1 [rad] | x2 [rad/s] | y1 [W] | y2 [W] | x1 whole run [rad] "
-             "| converged | us/step |",
-             "|---|---|---|---|---|---|---|---|"]
+             "| converged | x1/PCRB | x2/PCRB | pointing loss [dB] | us/step |",
+             "|---|---|---|---|---|---|---|---|---|---|---|"]
     for name, e in result.estimators.items():
         cells = [f"{e.rmse_steady[k]:.2e} ± {e.rmse_steady_std[k]:.1e}" for k in KEYS]
         conv = "-" if e.converged_fraction is None else f"{100 * e.converged_fraction:.0f}%"
+        bound = " | ".join(f"{e.rmse_over_pcrb[k]:.2f} ± {e.rmse_over_pcrb_err[k]:.2f}"
+                           for k in KEYS[:2]) if e.rmse_over_pcrb else "- | -"
         lines.append(f"| {name} | " + " | ".join(cells) +
-                     f" | {e.rmse['x1']:.2e} | {conv} | {e.us_per_step:.1f} |")
+                     f" | {e.rmse['x1']:.2e} | {conv} | {bound} | {e.pointing_loss_db:.2g} "
+                     f"| {e.us_per_step:.1f} |")
+    first = next(iter(result.estimators.values()), None)
+    if first is not None and first.pcrb_steady_x1 is not None:
+        lines.append(f"| PCRB (root, along {next(iter(result.estimators))}'s runs) | "
+                     f"{first.pcrb_steady_x1:.2e} | {first.pcrb_steady_x2:.2e} | | | | | "
+                     "1 | 1 | | |")
     if result.paper:
         p = result.paper
         lines.append(f"| paper ({p['source']}) | " + " | ".join(f"{p[k]:.2e}" for k in KEYS)
-                     + " | | | |")
+                     + " | | | | | | |")
     return "\n".join(lines) + "\n"
 
 
