@@ -154,7 +154,6 @@ class ResidualMonitor:
         return self.lost
 
 
-
 class GainTracker:
     """Online estimate of the link's gain relative to the model's, and the measurements
     rescaled to the model's gain.
@@ -171,9 +170,10 @@ class GainTracker:
     log-slope and the gain is barely determined, at the peak it is well determined.
 
     The estimator sees ``y / ratio``. ``ratio`` moves only when the filter's estimate
-    leaves a band of ``deadband`` (relative) around it: near the peak a gain error eps reads as an angle error, so the filter's
-    own jitter must not reach the estimator while the gain holds. The fit never uses
-    the estimate, so a wrong estimate cannot drag the gain with it.
+    leaves a band of ``deadband`` (relative) around it: near the peak a gain error eps
+    reads as an angle error, so the filter's own jitter must not reach the estimator
+    while the gain holds. The fit never uses the estimate, so a wrong estimate cannot
+    drag the gain with it.
 
     Args:
         system: the estimator's model (its ``h`` defines ratio = 1).
@@ -192,7 +192,7 @@ class GainTracker:
             a gain error inside the band still biased every estimator's phi by up to
             c1 sqrt(0.02) = 0.04 rad near the peak: 0.005 halved the KKL's and the
             EKF's steady phi RMSE, ``docs/bound.md``).
-        deadband_moving: the same while the filter sees a significant trend [-].
+        deadband_moving: the same while the filter sees a trend [-].
         max_std: samples whose log-gain standard deviation exceeds this are not used
             (at 0.1 it went blind 0.06 rad off the peak at d = 0.15 m: 9% gain drift).
     """
