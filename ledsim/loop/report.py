@@ -221,7 +221,8 @@ def write_run(summary: RunSummary, trace: Trace | None, out: Path,
 
 TABLE_HEADER = ("| scenario | disturbance | estimator | x1 RMSE [rad] | x2 RMSE [rad/s] "
                 "| align time [s] | availability | FEC share | mean P1 [W] | recovery [s] "
-                "| RTF |\n|---|---|---|---|---|---|---|---|---|---|---|")
+                "| RTF | x1/PCRB | pointing loss [dB] |"
+                "\n|---|---|---|---|---|---|---|---|---|---|---|---|---|")
 
 
 def recovered(s: RunSummary) -> str:
@@ -237,7 +238,8 @@ def _has_event(s: RunSummary) -> bool:
 
 
 def format_summary(s: RunSummary, first_cell: str | None = None) -> str:
-    """One markdown row of :data:`TABLE_HEADER` (``first_cell``: instead of the scenario)."""
+    """One markdown row of :data:`TABLE_HEADER` (``first_cell``: instead of the scenario;
+    x1/PCRB is the steady phi RMSE over the root of the posterior Cramér-Rao bound)."""
     def f(stat: Stat, fmt="{:.2e}"):
         return "-" if stat.mean is None else fmt.format(stat.mean)
 
@@ -246,4 +248,6 @@ def format_summary(s: RunSummary, first_cell: str | None = None) -> str:
             f"| {f(s.alignment_time, '{:.2f}')} | {f(s.availability, '{:.3f}')} "
             f"| {f(s.fec_share, '{:.3f}')} | {f(s.mean_power, '{:.3f}')} "
             f"| {recovered(s)} "
-            f"| {f(s.realtime_factor, '{:.0f}')} |")
+            f"| {f(s.realtime_factor, '{:.0f}')} "
+            f"| {'-' if s.rmse_over_pcrb_x1 is None else f'{s.rmse_over_pcrb_x1:.2f}'} "
+            f"| {f(s.pointing_loss_db or Stat(None, None, 0), '{:.3f}')} |")
