@@ -70,12 +70,18 @@ def main() -> None:
              "| pointing loss [dB] | availability |",
              "|---|---|---|---|---|---|---|---|---|---|---|"]
     ratios = {e: [] for e in ESTIMATORS if e != "oracle"}
+    below = []  # (row, estimator, state, ratio, error) more than 3 errors under the bound
     for group, label, kw in ROWS:
         for est in ESTIMATORS:
             cfg = RunConfig(estimator=est, seeds=args.seeds, seconds=args.seconds, **kw)
             s, _ = run_many(cfg, progress=False)
             if est in ratios:
                 ratios[est].append(s.rmse_over_pcrb_x1)
+                for key in ("x1", "x2"):
+                    r, e = (getattr(s, f"rmse_over_pcrb_{key}"),
+                            getattr(s, f"rmse_over_pcrb_err_{key}"))
+                    if r is not None and r + 3 * e < 1:
+                        below.append((label, est, key, r, e))
             rm1 = "-" if est == "oracle" else f"{s.rmse_steady_x1.mean:.2e}"
             rm2 = "-" if est == "oracle" else f"{s.rmse_steady_x2.mean:.2e}"
             lines.append(
@@ -95,6 +101,20 @@ def main() -> None:
     ax.legend(fontsize=8)
     ax.set_title(f"{args.seeds} seeds, {args.seconds:g} s runs")
     _save(fig, ROOT / "docs" / "img" / "bound.png")
+    names = {"x1": "phi", "x2": "phidot"}
+    lines += ["", "## Below the bound", "",
+              "Rows where an estimator's steady RMSE is below the bound by more than three "
+              "Monte-Carlo standard errors: "
+              + ("; ".join(f"{label}, {est}, {names[k]}: {r:.2f} ± {e:.2f}"
+                           for label, est, k, r, e in below) or "none") + ".", "",
+              "The loop's bound is the bound of the model the estimators use, with that "
+              "model's process noise Q (1e-4 rad and 2e-4 rad/s a step). The MuJoCo world "
+              "draws no such noise: where nothing else moves phidot (a still hull, the IMU "
+              "off), the true rate is smoother than the model says, and a filter can sit "
+              "below the model's bound on phidot without any information it should not "
+              "have. Where the hull or the light moves, the world's own unmodelled motion "
+              "(the hull's input error, the identified model's error) keeps every "
+              "estimator well above it."]
     atomic_write_text(ROOT / "docs" / "bound.md", "\n".join(lines) + "\n")
 
 
