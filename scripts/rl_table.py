@@ -98,8 +98,9 @@ def main() -> None:
         "random misalignment within 0.3 rad. Availability: share of the 10 s episode "
         "with P1 at least 90 % of what the geometry allows (the reward at or above 0.9); "
         "worst: the lowest episode's; against PPO: the mean difference of the paired "
-        "episodes with its 95 % interval (Student's t). Trained on one core each, two "
-        "runs at a time on the 2-core machine.", "",
+        "episodes with its 95 % interval (Student's t). Trained on one core each; the "
+        "training times move with the machine's load (these three runs shared the "
+        "2-core machine with each other and other jobs).", "",
         "| disturbance | start | policy | availability | worst episode "
         "| against PPO |", "|---|---|---|---|---|---|", *rows, "",
         "| disturbance | policy | training steps | training [s] |", "|---|---|---|---|",
