@@ -31,12 +31,15 @@ class Estimator(ABC):
 
     def __init__(self, system: DiscreteSystem):
         self.system = system
+        # The training box as plain floats: in_domain runs twice a step.
+        self._box = list(zip(np.asarray(system.domain_low, dtype=float).tolist(),
+                             np.asarray(system.domain_high, dtype=float).tolist(),
+                             strict=True))
 
     def in_domain(self, x) -> bool:
         """Whether the state ``x`` (n_state,) lies inside the system's training box."""
-        return all(lo <= v <= hi for v, lo, hi in zip(
-            np.asarray(x, dtype=float).tolist(), self.system.domain_low.tolist(),
-            self.system.domain_high.tolist(), strict=True))
+        return all(lo <= v <= hi for v, (lo, hi) in zip(
+            np.asarray(x, dtype=float).tolist(), self._box, strict=True))
 
     @abstractmethod
     def reset(self, x0: np.ndarray | None = None,

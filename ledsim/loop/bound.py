@@ -20,7 +20,7 @@ import numpy as np
 
 from observer.pcrb import bound_against, box_prior, process_information, trajectory_terms
 
-from ..optics import response_slope, response_terms, transmitter_gain
+from ..optics import layout_power_jacobian, transmitter_gain
 
 
 def run_terms(res, u: np.ndarray, measured: np.ndarray, model, constants, noise) -> dict:
@@ -34,14 +34,11 @@ def run_terms(res, u: np.ndarray, measured: np.ndarray, model, constants, noise)
         constants: the link (the layout and the receiver's response).
         noise: the run's measurement noise.
     """
-    lay = constants.layout
     x = res.x
-    phi = lay.angle(x)
+    # d(power_i)/d(state) at the true geometry: each photodiode's own transmitter gain
+    # and visible share times the receiver's slope.
     gain = transmitter_gain(res.distance, res.emission_angle, constants) * res.visible_fraction
-    H = np.zeros((len(x), lay.n_photodiodes, lay.n_state))
-    for i, offset in enumerate(lay.offsets):  # d(power_i)/d(phi) at the true geometry
-        terms = response_terms(phi + offset, constants.receiver)
-        H[:, i, 0] = gain[:, i] * response_slope(*terms, constants.receiver)
+    H = layout_power_jacobian(1.0, constants.layout.angle(x), constants) * gain[:, :, None]
     F = model.f_jacobian(x, u[:, None])
     terms = trajectory_terms(F, H, noise.std_at() ** 2,
                              process_information(model.process_noise_std), measured)

@@ -263,7 +263,8 @@ class ClosedLoop:
                         Navigation(run.hull, run.station, run.navigated), window,
                         run.vehicle is not None and run.vehicle.station_keeping,
                         None if run.given is None else
-                        run.given.series(run.step.estimator, self.cfg), run.noise,
+                        run.given.series(run.step.estimator, self.cfg, run.u,
+                                         run.measured), run.noise,
                         (self.model, run.u, run.measured), run.outside)
                 for i, run in enumerate(runs)]
 

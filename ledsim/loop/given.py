@@ -22,8 +22,6 @@ class GivenRecord:
     """The per-step part of the record, for a run of ``steps`` steps."""
 
     def __init__(self, steps: int):
-        self.withheld = np.zeros((steps, 2), dtype=bool)
-        self.u = np.zeros(steps)
         self.u_hull = np.zeros(steps)
         self.reseeded = np.zeros(steps, dtype=bool)
         self.gain = np.ones(steps)
@@ -31,19 +29,19 @@ class GivenRecord:
     def take(self, k: int, step, los) -> None:
         """Step ``k`` of the :class:`~ledsim.step.ControlStep` ``step`` (``los``: the
         vehicle's line of sight, None without the IMU)."""
-        self.withheld[k] = ~np.isfinite(step.y_gated)
-        self.u[k] = step.u
         self.u_hull[k] = 0.0 if los is None else los.acceleration
         self.reseeded[k] = step.decision.reseeded
         self.gain[k] = step.supervisor.gain_ratio
 
-    def series(self, estimator, cfg) -> dict[str, np.ndarray]:
-        """The trace's series of what was given: the per-step ones, the estimator's
-        calls (when it recorded them: not the oracle's) and ``config``, the run's
-        configuration as JSON."""
-        out = {**cfg.world_config().constants.layout.power_columns(self.withheld,
+    def series(self, estimator, cfg, u: np.ndarray, measured: np.ndarray
+               ) -> dict[str, np.ndarray]:
+        """The trace's series of what was given: the per-step ones (with the input ``u``
+        [rad/s^2] and the samples the gate passed, ``measured``, that the run keeps for
+        every run), the estimator's calls (when it recorded them: not the oracle's) and
+        ``config``, the run's configuration as JSON."""
+        out = {**cfg.world_config().constants.layout.power_columns(~measured,
                                                                     prefix="withheld_"),
-               "u": self.u, "u_hull": self.u_hull, "reseeded": self.reseeded,
+               "u": u, "u_hull": self.u_hull, "reseeded": self.reseeded,
                "gain": self.gain, "config": np.array(json.dumps(asdict(cfg)))}
         if isinstance(estimator, RecordingEstimator):
             out.update(estimator.record.arrays())

@@ -14,7 +14,7 @@ from observer.pcrb import (
     trajectory_terms,
 )
 
-from ..control import intensity_maximum
+from ..control import intensity_maximum, receiver_peak
 from ..optics import receiver_response
 from .model import LEDLinkModel
 from .scenarios import Trajectory
@@ -31,10 +31,9 @@ def pointing_loss(system: LEDLinkModel, x: np.ndarray, xhat: np.ndarray) -> floa
     what the estimate would cost a receiver that were.)"""
     c = system.constants
     lay = c.layout
-    best = intensity_maximum(c)
-    received = receiver_response(best + lay.angle(x) - lay.angle(xhat), c.receiver)
-    return pointing_loss_db(np.full(len(received), receiver_response(best, c.receiver)),
-                            received)
+    received = receiver_response(intensity_maximum(c) + lay.angle(x) - lay.angle(xhat),
+                                 c.receiver)
+    return pointing_loss_db(np.full(len(received), receiver_peak(c)), received)
 
 
 def bound_terms(system: LEDLinkModel, out: Trajectory) -> BoundTerms:
