@@ -63,6 +63,10 @@ def test_evaluate_runs_one_estimator_by_name_and_refuses_an_unknown_one(tmp_path
     r = run_cli("evaluate", "--scenario", "open-loop", "--estimator", "oracle",
                 "--out", str(tmp_path / "o"))
     assert_user_error(r, "oracle")
+    r = run_cli("evaluate", "--scenario", "if1", "--distance", "0.15", "--estimator",
+                "kkl-scheduled", "--out", str(tmp_path / "s"))
+    assert_user_error(r, "--design scheduled")  # none shipped there: how to train one
+    assert not (tmp_path / "s").exists()
 
 
 def test_a_loop_summary_gives_the_bound_and_the_pointing_loss():

@@ -131,8 +131,8 @@ def _checkpoint(name: str, cfg: EvaluationConfig, distance: float):
         return default_checkpoint(distance, "paper")
     if name == "kkl-handover":
         return require_shipped_checkpoint(distance)
-    if name == "kkl-scheduled":
-        return require_shipped_checkpoint(distance, design="scheduled")
+    if name == "kkl-scheduled":  # a --checkpoint given is the one to run (the error says so)
+        return cfg.checkpoint or require_shipped_checkpoint(distance, design="scheduled")
     return None
 
 
