@@ -12,7 +12,7 @@ from __future__ import annotations
 import functools
 import math
 from dataclasses import asdict, dataclass, field, replace
-from typing import TYPE_CHECKING
+from typing import TYPE_CHECKING, Protocol
 
 from .errors import LedsimError
 
@@ -32,6 +32,16 @@ GRAVITY = 9.81
 
 class ConfigError(LedsimError):
     """A user-supplied constant is out of its allowed range."""
+
+
+class PhysicalLink(Protocol):
+    """What the constants need of a physical link
+    (:class:`ledsim.radiometry.link.RadiometricLink`): its receiver's noise."""
+
+    name: str
+
+    def noise(self, bandwidth: float, n_output: int = 2, scale: float = 1.0,
+              digitised: bool = True) -> MeasurementNoise: ...
 
 
 @dataclass(frozen=True)
@@ -69,6 +79,9 @@ class LinkConstants:
         measurement_noise_var: variance of the additive power noise [W^2] (paper: 0.001).
         process_noise_std: per-step standard deviation of (w1 [rad], w2 [rad/s]).
         receiver: the photodiode response g(phi).
+        link: the physical link these constants were built from
+            (:meth:`ledsim.radiometry.link.RadiometricLink.constants`), whose receiver
+            noise depends on the signal; None: the paper's bench, whose noise does not.
     """
 
     Te: float = 0.01
@@ -81,6 +94,7 @@ class LinkConstants:
     measurement_noise_var: float = 1e-3
     process_noise_std: tuple[float, float] = (1e-4, 2e-4)
     receiver: ReceiverResponse = field(default_factory=ReceiverResponse)
+    link: PhysicalLink | None = None
 
     def __post_init__(self) -> None:
         self.validate()
@@ -128,7 +142,11 @@ class LinkConstants:
 
     def measurement_noise(self, scale: float = 1.0) -> MeasurementNoise:
         """The photodiodes' power noise at noise scale ``scale`` [-]: the one object
-        the sensor, the estimators, the supervisor, the env and the link budget read."""
+        the sensor, the estimators, the supervisor, the env and the link budget read:
+        the physical link's over the pointing channel's bandwidth 1 / (2 Te), or the
+        paper's."""
+        if self.link is not None:
+            return self.link.noise(1.0 / (2.0 * self.Te), self.layout.n_photodiodes, scale)
         from observer.noise import MeasurementNoise
 
         return MeasurementNoise(self.measurement_noise_std, self.layout.n_photodiodes, scale)
@@ -138,8 +156,12 @@ class LinkConstants:
         return replace(self, **changes)
 
     def to_dict(self) -> dict:
+        """The constants as JSON-ready data (``link`` only for a physical link, so the
+        paper's metadata keeps its keys)."""
         d = asdict(self)
         d["process_noise_std"] = list(self.process_noise_std)
+        if self.link is None:
+            del d["link"]
         return d
 
     @classmethod
@@ -147,6 +169,9 @@ class LinkConstants:
         d = dict(d)
         d["receiver"] = ReceiverResponse(**d.get("receiver", {}))
         d["process_noise_std"] = tuple(d.get("process_noise_std", (1e-4, 2e-4)))
+        if d.get("link") is not None:
+            raise ConfigError("these constants are of a physical link: read them with "
+                              "ledsim.radiometry.link.constants_from_dict")
         return cls(**d)
 
 

@@ -27,6 +27,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from observer.noise import MeasurementNoise
+
 from .results import DictAccess
 
 #: Data rate of the link [bit/s]. The paper's measurement noise (sigma = 0.032 W on a
@@ -76,6 +78,45 @@ def link_budget(power: np.ndarray, noise_std: float, Te: float,
                 bit_rate: float = BIT_RATE) -> LinkBudget:
     """The link budget of a run from photodiode 1's noise-free power at each step [W]."""
     s = snr(power, noise_std, Te, bit_rate)
+    ber = ber_ook(s)
+    ok = ber < FEC_LIMIT
+    mean_snr = float(np.mean(s))
+    return LinkBudget(10.0 * math.log10(mean_snr) if mean_snr > 0 else None,
+                      float(np.mean(ber)), bit_rate * float(np.mean(ok)),
+                      float(np.mean(ok)))
+
+
+def data_channel(noise: MeasurementNoise, Te: float, bit_rate: float = BIT_RATE
+                 ) -> MeasurementNoise:
+    """The data channel's noise: the pointing channel's ``noise`` (one sample of period
+    ``Te`` [s], bandwidth 1 / (2 Te)) over the data's bandwidth R_b / 2, no ADC."""
+    return noise.at_bandwidth(bit_rate * Te)
+
+
+def q_factor(power, data_noise: MeasurementNoise) -> np.ndarray:
+    """Q = P / (sigma_on + sigma_off) [-] of OOK between P [W] and 0, whose noise
+    ``data_noise`` depends on the level (shot noise on "on" only); BER = Q(Q-factor)
+    with the threshold where the two levels' errors balance (Personick's form)."""
+    p = np.maximum(np.asarray(power, dtype=float), 0.0)
+    return p / (data_noise.analog_std(p) + data_noise.analog_std(0.0))
+
+
+def snr_at(power, noise: MeasurementNoise, Te: float, bit_rate: float = BIT_RATE
+           ) -> np.ndarray:
+    """Electrical SNR [-] of OOK at ``bit_rate`` for received powers [W]: (2 Q)^2, which
+    is P^2 / sigma_b^2 (:func:`snr`) when the noise does not depend on the signal."""
+    if not noise.signal_dependent:
+        return snr(power, noise.std, Te, bit_rate)
+    return (2.0 * q_factor(power, data_channel(noise, Te, bit_rate))) ** 2
+
+
+def link_budget_of(power: np.ndarray, noise: MeasurementNoise, Te: float,
+                   bit_rate: float = BIT_RATE) -> LinkBudget:
+    """:func:`link_budget` with the run's noise object: the paper's formula when the
+    noise does not depend on the signal (the same numbers), shot noise otherwise."""
+    if not noise.signal_dependent:
+        return link_budget(power, noise.std, Te, bit_rate)
+    s = snr_at(power, noise, Te, bit_rate)
     ber = ber_ook(s)
     ok = ber < FEC_LIMIT
     mean_snr = float(np.mean(s))

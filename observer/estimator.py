@@ -111,9 +111,18 @@ class GaussianFilter(Estimator):
         super().__init__(system)
         self.Q = np.diag(system.process_noise_std**2)
         self.R = np.diag(system.measurement_noise_std**2)
+        noise = system.measurement_noise
+        #: The noise depends on the output (a physical receiver): R is taken at the
+        #: predicted output each update (:meth:`R_at`).
+        self.signal_noise = noise is not None and noise.signal_dependent
         self.P0 = self.initial_covariance() if P0 is None else np.asarray(P0, dtype=float)
         self.lost_nis, self.lost_steps = lost_nis, lost_steps
         self.reset()
+
+    def R_at(self, y_pred: np.ndarray, ok: np.ndarray) -> np.ndarray:
+        """R over the usable outputs ``ok`` at the predicted output ``y_pred``."""
+        R = self.system.measurement_noise.covariance(y_pred) if self.signal_noise else self.R
+        return R[np.ix_(ok, ok)]
 
     def reset(self, x0=None, covariance=None) -> None:
         self.x = self.initial_guess(x0)

@@ -2,17 +2,67 @@
 
 The sensor draws from it, the estimators weigh by it (their R), the supervisor starts
 its noise level from it, the environment bounds its observations by it and the link
-budget turns it into a bit error rate. Today it is the paper's: zero-mean Gaussian,
-the same standard deviation on every output, independent between outputs and steps.
-A signal-dependent receiver (shot noise, an amplifier) gives it terms in the clean
-outputs: :meth:`MeasurementNoise.std_at` is where they enter.
+budget turns it into a bit error rate. The paper's is zero-mean Gaussian, the same
+standard deviation on every output, independent between outputs and steps. A physical
+receiver adds terms that depend on the clean output (:meth:`MeasurementNoise.std_at`):
+the signal's shot noise, a variance proportional to the signal, and the quantisation
+of an ADC behind an automatic gain control (:class:`Digitiser`), whose step follows the
+signal's decade. Each channel has its noise bandwidth: the pointing samples once a
+control period (1 / (2 Te)), the data at the bit rate (:meth:`MeasurementNoise.at_bandwidth`).
 """
 
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass, replace
 
 import numpy as np
+
+
+@dataclass(frozen=True)
+class Digitiser:
+    """An ADC behind a receiver gain stepped by decades (automatic gain control).
+
+    The gain control picks the most sensitive of ``decades`` ranges whose full scale,
+    ``full_scale x 10^-j``, holds twice the clean signal; the ADC rounds to
+    ``2^bits`` steps over +-that range and clips beyond it. Above the least sensitive
+    range the receiver saturates at ``full_scale``. The gain control follows the clean
+    signal (it averages over many samples), so the step is a function of it.
+
+    Attributes:
+        bits: ADC resolution [bits].
+        full_scale: the output that saturates the least sensitive range [output unit].
+        decades: number of gain ranges, a decade apart [-].
+    """
+
+    bits: int = 12
+    full_scale: float = 1e-3
+    decades: int = 6
+
+    def __post_init__(self) -> None:
+        if not (isinstance(self.bits, int) and 1 <= self.bits <= 32):
+            raise ValueError(f"bits={self.bits!r} is not allowed: must be an integer in 1..32")
+        if not (self.full_scale > 0 and math.isfinite(self.full_scale)):
+            raise ValueError(f"full_scale={self.full_scale!r} is not allowed: must be > 0")
+        if not (isinstance(self.decades, int) and 1 <= self.decades <= 12):
+            raise ValueError(f"decades={self.decades!r} is not allowed: must be an integer "
+                             "in 1..12")
+
+    def range_of(self, clean) -> np.ndarray:
+        """Full scale of the range the gain control picks for ``clean`` [output unit]."""
+        level = np.maximum(2.0 * np.abs(np.asarray(clean, dtype=float)), 1e-300)
+        j = np.clip(np.floor(np.log10(self.full_scale / level)), 0, self.decades - 1)
+        return self.full_scale * 10.0 ** -j
+
+    def step(self, clean) -> np.ndarray:
+        """Quantisation step at ``clean`` [output unit]: two full scales over 2^bits."""
+        return 2.0 * self.range_of(clean) / 2**self.bits
+
+    def apply(self, values, clean) -> np.ndarray:
+        """``values`` rounded to the step and clipped to the range picked for ``clean``."""
+        top = self.range_of(clean)
+        q = 2.0 * top / 2**self.bits
+        return np.clip(np.round(np.asarray(values, dtype=float) / q) * q, -top, top)
 
 
 @dataclass(frozen=True)
@@ -24,11 +74,16 @@ class MeasurementNoise:
             output's unit (W for a photodiode power).
         n_output: number of outputs it is drawn for (photodiodes) [-].
         scale: the run's noise scale: the standard deviation over the nominal [-].
+        shot_coefficient: the signal's shot noise: variance per unit of clean output at
+            scale 1 [output unit] (0: none, the paper's).
+        digitiser: the ADC and gain control the outputs pass (None: none, the paper's).
     """
 
     nominal_std: float
     n_output: int = 2
     scale: float = 1.0
+    shot_coefficient: float = 0.0
+    digitiser: Digitiser | None = None
 
     def __post_init__(self) -> None:
         if not (self.nominal_std >= 0 and np.isfinite(self.nominal_std)):
@@ -38,21 +93,55 @@ class MeasurementNoise:
             raise ValueError(f"scale={self.scale!r} is not allowed: must be >= 0 and finite")
         if self.n_output < 1:
             raise ValueError(f"n_output={self.n_output!r} is not allowed: must be >= 1")
+        if not (self.shot_coefficient >= 0 and np.isfinite(self.shot_coefficient)):
+            raise ValueError(f"shot_coefficient={self.shot_coefficient!r} is not allowed: "
+                             "must be >= 0 and finite")
 
     @property
     def std(self) -> float:
-        """Standard deviation of one sample of each output [output unit]."""
+        """Standard deviation of one sample of each output without a signal: the floor
+        [output unit] (the whole noise when it does not depend on the signal)."""
         return self.nominal_std * self.scale
 
-    def std_at(self, clean=None) -> np.ndarray:
-        """Standard deviation of each output given its noise-free value ``clean`` (not
-        used yet: the paper's noise does not depend on the signal), shape
-        ``(n_output,)``."""
-        return np.full(self.n_output, self.std)
+    @property
+    def signal_dependent(self) -> bool:
+        """Whether the noise depends on the clean output (shot noise or an ADC)."""
+        return self.shot_coefficient > 0 or self.digitiser is not None
 
-    def covariance(self) -> np.ndarray:
-        """R = diag(std^2), shape ``(n_output, n_output)``."""
-        return np.diag(self.std_at() ** 2)
+    def analog_std(self, clean) -> np.ndarray:
+        """Standard deviation before the ADC at clean outputs ``clean`` [output unit]:
+        scale x sqrt(floor^2 + shot_coefficient x max(clean, 0)), clean's shape."""
+        clean = np.maximum(np.asarray(clean, dtype=float), 0.0)
+        return self.scale * np.sqrt(self.nominal_std**2 + self.shot_coefficient * clean)
+
+    def std_at(self, clean=None) -> np.ndarray:
+        """Standard deviation of each output given its noise-free value ``clean`` [output
+        unit]: the analog noise and the ADC's quantisation (step^2 / 12), shape
+        ``(n_output,)`` (``clean``'s shape when given). Without ``clean``: the floor."""
+        if clean is None or not self.signal_dependent:
+            return np.full(self.n_output if clean is None else np.shape(clean), self.std)
+        var = self.analog_std(clean) ** 2
+        if self.digitiser is not None:
+            var = var + self.digitiser.step(clean) ** 2 / 12.0
+        return np.sqrt(var)
+
+    def measure(self, clean, rng: np.random.Generator) -> np.ndarray:
+        """A noisy reading of the clean outputs ``clean``: analog noise drawn at the
+        signal, then the ADC (one normal draw an output, as :meth:`sample`)."""
+        clean = np.asarray(clean, dtype=float)
+        y = clean + rng.standard_normal(clean.shape) * self.analog_std(clean)
+        return y if self.digitiser is None else self.digitiser.apply(y, clean)
+
+    def at_bandwidth(self, ratio: float) -> MeasurementNoise:
+        """The noise of a channel whose bandwidth is ``ratio`` times this one's [-]: white
+        terms' variances times ``ratio``, and no ADC (the data channel's slicer)."""
+        return replace(self, nominal_std=self.nominal_std * math.sqrt(ratio),
+                       shot_coefficient=self.shot_coefficient * ratio, digitiser=None)
+
+    def covariance(self, clean=None) -> np.ndarray:
+        """R = diag(std^2) (at the clean outputs ``clean``, when given), shape
+        ``(n_output, n_output)``."""
+        return np.diag(self.std_at(clean) ** 2)
 
     def sample(self, rng: np.random.Generator) -> np.ndarray:
         """One draw of v_k, shape ``(n_output,)``."""

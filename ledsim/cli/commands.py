@@ -12,10 +12,12 @@ import os
 import time
 from pathlib import Path
 
-from ..config import PAPER_DISTANCE
 from ..errors import LedsimError
 from ..outputs import check_out_dir, check_out_file, output_folder, save_checkpoint
+from .budget_cmd import budget  # noqa: F401 (the budget command)
 from .checks import _check_vehicle, _vehicle, _warn_unserved
+from .export_cmd import export  # noqa: F401 (the export command)
+from .groups import resolved_distance
 from .replay_cmd import replay  # noqa: F401 (the replay command)
 
 log = logging.getLogger("ledsim")
@@ -29,12 +31,23 @@ def _loop_config(args, **given):
     from ..loop.config import PARTS, RunConfig
 
     values = {**vars(args), "disturbances": tuple(args.disturbance),
-              "supervision": not args.no_supervision, **_vehicle(args), **given}
+              "supervision": not args.no_supervision, **_vehicle(args),
+              "distance": resolved_distance(args), **given}
     parts = {name: kind(**{f.name: values[f.name] for f in fields(kind) if f.name in values})
              for name, kind in PARTS.items()}
     cfg = RunConfig.of(**parts)
     cfg.validate()
     return cfg
+
+
+def _link(args, distance: bool = True) -> dict:
+    """The run's link flags (``--link``, ``--water``, ``--attenuation``, ``--bit-rate``
+    and, with ``distance``, the preset's distance unless ``--distance`` is given)."""
+    link = {k: getattr(args, k, None) for k in ("water", "attenuation", "bit_rate")}
+    link["link"] = getattr(args, "link", "paper")
+    if distance:
+        link["distance"] = resolved_distance(args)
+    return link
 
 
 def simulate(args) -> int:
@@ -53,7 +66,11 @@ def simulate(args) -> int:
                              args.torque_frequency)
     disturbances = [parse_disturbance(d) for d in args.disturbance]
     check_timing(disturbances, args.seconds)
-    constants = LinkConstants(distance=args.distance, dphi=math.radians(args.dphi))
+    from ..radiometry.presets import link_constants
+
+    args.distance = resolved_distance(args)
+    constants = link_constants(args.link, args.distance, args.water, args.attenuation,
+                               LinkConstants(dphi=math.radians(args.dphi)))
     extra = {} if args.scene is None else {"xml": Path(args.scene)}
     world = LinkWorld(WorldConfig(constants=constants, torque_limit=args.torque_limit,
                                   integrator=args.integrator,
@@ -112,11 +129,15 @@ def demo(args) -> int:
     t0 = time.perf_counter()
     rows, summaries = [], []
     with output_folder(out) as tmp:
-        for est in COMPARED_ESTIMATORS:
+        link = _link(args)
+        # On a physical link only the estimators that need no shipped KKL (see docs/link.md)
+        compared = [e for e in COMPARED_ESTIMATORS if link["link"] == "paper"
+                    or not e.startswith("kkl")]
+        for est in compared:
             cfg = RunConfig(scenario="align", estimator=est, seeds=args.seeds,
-                            scene=args.scene, **_vehicle(args))
+                            scene=args.scene, **_vehicle(args), **link)
             cfg.validate()
-            if est == COMPARED_ESTIMATORS[0]:
+            if est == compared[0]:
                 _check_vehicle(cfg)
             summary, trace = run_many(cfg, progress=not args.quiet)
             write_run(summary, trace, tmp / est)
@@ -126,20 +147,23 @@ def demo(args) -> int:
         atomic_write_text(tmp / "table.md", TABLE_HEADER + "\n" + "\n".join(rows) + "\n")
         write_json(tmp / "results.json", summaries)
         if not args.no_video:
-            _demo_video(tmp, args.scene, not args.quiet, _vehicle(args))
+            _demo_video(tmp, args.scene, not args.quiet, _vehicle(args), link, compared[0])
     log.info(f"wrote {out}/table.md, results.json, <estimator>/run.png"
              f"{'' if args.no_video else ', alignment.mp4, alignment.png'} in "
           f"{time.perf_counter() - t0:.0f} s")
     return 0
 
 
-def _demo_video(out: Path, scene: str | None, progress: bool, vehicle: dict) -> None:
-    """A short video of the KKL-driven alignment with an occlusion, and a still frame."""
+def _demo_video(out: Path, scene: str | None, progress: bool, vehicle: dict,
+                link: dict | None = None, estimator: str = "kkl") -> None:
+    """A short video of the alignment (``estimator``-driven; the KKL on the paper's
+    bench) with an occlusion, and a still frame."""
     from ..loop.config import RunConfig
     from ..loop.video import VideoSpec, check_video, render_video
 
-    cfg = RunConfig(scenario="align", estimator="kkl", seconds=5.0, scene=scene,
-                    disturbances=("occlusion:start=3,duration=0.5",), **vehicle)
+    cfg = RunConfig(scenario="align", estimator=estimator, seconds=5.0, scene=scene,
+                    disturbances=("occlusion:start=3,duration=0.5",), **vehicle,
+                    **(link or {}))
     check_video(cfg, VideoSpec())
     frames = render_video(cfg, 0, out / "alignment.mp4", VideoSpec(),
                           still=out / "alignment.png", progress=progress)
@@ -213,6 +237,7 @@ def train(args) -> int:
 def sweep(args) -> int:
     from ..loop.config import RunConfig
     from ..loop.sweep import SweepGrid, run_sweep
+    from ..radiometry.presets import preset_named
 
     if args.address is not None and args.backend != "ray":
         raise LedsimError("--address needs --backend ray")
@@ -220,12 +245,12 @@ def sweep(args) -> int:
                      particles=args.particles, seconds=args.seconds, scene=args.scene,
                      supervision=not args.no_supervision, integrator=args.integrator,
                      initial_angle=args.initial_angle, acquisition=args.acquisition,
-                     **_vehicle(args))
+                     **_vehicle(args), **_link(args, distance=False))
     base.validate()
     _check_vehicle(base)
     grid = SweepGrid(estimators=args.estimator or ["kkl"],
                      disturbances=args.disturbance or ["none"],
-                     distances=args.distance or [PAPER_DISTANCE],
+                     distances=args.distance or [preset_named(args.link).distance],
                      noise_scales=args.noise_scale or [1.0], seeds=args.seeds, base=base)
     out = check_out_dir(args.out)
     t0 = time.perf_counter()
@@ -235,47 +260,3 @@ def sweep(args) -> int:
              f"{', '.join(str(p) for p in paths)}")
     print((out / "summary.csv").read_text(), end="")
     return 0
-
-
-def export(args) -> int:
-    """One step of a KKL checkpoint (update with its missing-sample hold, predict with
-    Omega, and the decoder) as an ONNX graph."""
-    from observer import checkpoint
-    from observer.export import kkl_step_graph
-
-    from ..config import LinkConstants
-    from ..estimators import build_estimator
-    from ..outputs import atomic_write_bytes
-    from ..resources import require_shipped_checkpoint
-
-    out = check_out_file(args.out, ".onnx")
-    path = args.checkpoint or require_shipped_checkpoint(PAPER_DISTANCE, "mujoco")
-    saved = checkpoint.metadata(path)["system"]
-    constants = LinkConstants.from_dict(saved["constants"])
-    if saved.get("class") == "LEDLinkModel":
-        from ..paper.model import LEDLinkModel
-
-        system = model = LEDLinkModel(constants)
-    elif saved.get("class") == "GimbalSystem":
-        from ..loop.estimation import identified_model
-        from ..physics.scene import WorldConfig
-        from ..physics.system import GimbalSystem
-
-        world = saved.get("world", {})
-        system = GimbalSystem(WorldConfig(constants=constants, **{
-            k: world[k] for k in ("timestep", "water_density", "water_viscosity",
-                                  "gimbal_damping") if k in world}))
-        model = identified_model(system)  # Omega's f and the h of missing samples
-    else:
-        raise LedsimError(f"checkpoint {str(path)!r} is for a {saved.get('class')!r} system: "
-                          "ledsim exports observers of LEDLinkModel or GimbalSystem")
-    obs = build_estimator("kkl", system, model=model, checkpoint=path)
-    if not hasattr(obs, "eigenvalues"):
-        raise LedsimError(f"checkpoint {str(path)!r} is a gain-scheduled KKL: ledsim exports "
-                          "fixed-gain observers (its gain schedule is not one ONNX step)")
-    graph = kkl_step_graph(obs, model.step_form())
-    atomic_write_bytes(out, lambda tmp: Path(tmp).write_bytes(graph.SerializeToString()))
-    log.info(f"wrote {out}: one step of {path} ({saved.get('class')}, q = {obs.q}); inputs "
-             "z, y [W], u [rad/s^2]; outputs x_hat, z_next")
-    return 0
-

@@ -3,8 +3,9 @@ its start, the vehicle, the loop)."""
 
 from __future__ import annotations
 
-from ..config import PAPER_DISTANCE
 from .options import (
+    ATTENUATION,
+    BIT_RATE,
     DISTANCE,
     PARTICLES,
     SECONDS,
@@ -17,9 +18,36 @@ def choices(registry) -> dict:
     return dict(choices=list(registry), metavar="{" + ",".join(registry) + "}")
 
 
-def add_world_args(p, distance_help="link distance d [m]") -> None:
-    p.add_argument("--distance", type=DISTANCE, default=PAPER_DISTANCE, help=distance_help)
+def add_world_args(p, distance_help="link distance d [m] (default: 0.085 for --link "
+                   "paper, the preset's own otherwise)") -> None:
+    p.add_argument("--distance", type=DISTANCE, default=None, help=distance_help)
+    add_link_args(p)
     add_scene_args(p)
+
+
+def add_link_args(p) -> None:
+    """The physical link: its preset, the water and the data's bit rate."""
+    from ..radiometry.presets import LINK_PRESETS
+    from ..radiometry.water import WATER_TYPES
+
+    p.add_argument("--link", default="paper", **choices(LINK_PRESETS),
+                   help="the link: paper (the paper's 8.5 cm bench) or a real LED modem "
+                   "(docs/link.md)")
+    p.add_argument("--water", default=None, **choices(WATER_TYPES),
+                   help="water type (default: the preset's, clear-ocean)")
+    p.add_argument("--attenuation", type=ATTENUATION, default=None, metavar="C",
+                   help="the water's beam attenuation c [1/m] instead of the type's")
+    p.add_argument("--bit-rate", type=BIT_RATE, default=None, metavar="R",
+                   help="the data's bit rate [bit/s] (default: the preset's; 1000 for the "
+                   "paper's bench)")
+
+
+def resolved_distance(args) -> float:
+    """``--distance``, or the ``--link`` preset's default distance [m]."""
+    from ..radiometry.presets import preset_named
+
+    d = getattr(args, "distance", None)
+    return preset_named(getattr(args, "link", "paper")).distance if d is None else d
 
 
 def add_scene_args(p) -> None:

@@ -28,7 +28,9 @@ def number(lo: float, hi: float, unit: str = "", *, integer: bool = False,
     return parse
 
 
-DISTANCE = number(0.0, 5.0, "m", lo_open=True)
+DISTANCE = number(0.0, 500.0, "m", lo_open=True)
+ATTENUATION = number(0.0, 100.0, "1/m")
+BIT_RATE = number(0.0, 1e10, "bit/s", lo_open=True)
 SECONDS = number(0.0, 3600.0, "s", lo_open=True)
 SEED = number(0, 2**32 - 1, integer=True)
 SEEDS = number(1, 10_000, integer=True)

@@ -8,6 +8,7 @@ import math
 
 from ..config import PAPER_DISTANCE
 from .groups import (
+    add_link_args,
     add_loop_args,
     add_run_knobs,
     add_scene_args,
@@ -124,6 +125,20 @@ def build_parser() -> argparse.ArgumentParser:
     rp.add_argument("--json", action="store_true",
                     help="print the result as JSON (max_abs_difference, ...)")
 
+    bg = command("budget", "the link budget against distance: SNR, BER, throughput, FEC "
+                  "share and the range at the FEC limit, for a --link preset")
+    add_link_args(bg)
+    bg.add_argument("--distance", action="append", type=DISTANCE, default=[],
+                    help="a distance [m] (repeatable; default: 12 from a tenth of the FEC "
+                    "range to twice it)")
+    bg.add_argument("--pointing-error", type=number(0.0, 1.0, "rad"), default=0.0,
+                    metavar="RAD", help="the receiver's Gaussian pointing error [rad]: the "
+                    "FEC share is the share of it the link survives")
+    bg.add_argument("--json", action="store_true",
+                    help="print the report as JSON (range_at_fec_limit_m, rows, ...)")
+    bg.add_argument("--plot", default=None, metavar="FILE",
+                    help="also write SNR and BER against distance to FILE (.png)")
+
     sim = command("simulate", "run the MuJoCo world headless; save series + plot")
     sim.add_argument("--seconds", type=SECONDS, default=5.0, help="duration [s]")
     sim.add_argument("--torque-profile", default="zero", **choices(TORQUE_PROFILES),
@@ -217,6 +232,7 @@ def build_parser() -> argparse.ArgumentParser:
     sw.add_argument("--no-supervision", action="store_true",
                     help="no loss detection or reacquisition (see ledsim run)")
     add_vehicle_args(sw)
+    add_link_args(sw)
     add_scene_args(sw)
     sw.add_argument("--backend", default="local", **choices(BACKENDS),
                     help="local processes, or Ray (pip install 'ledsim[ray]')")
@@ -234,5 +250,8 @@ def build_parser() -> argparse.ArgumentParser:
     dm.add_argument("--out", default="out/demo", help="output folder")
     dm.add_argument("--scene", help="MJCF scene file (default: the shipped led_link.xml)")
     dm.add_argument("--no-video", action="store_true", help="skip the rendered video")
+    dm.add_argument("--distance", type=DISTANCE, default=None,
+                    help="link distance d [m] (default: the --link preset's)")
+    add_link_args(dm)
     add_vehicle_args(dm)
     return p

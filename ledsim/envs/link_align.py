@@ -68,6 +68,7 @@ from ..optics import IMPOSSIBLE_SIGMAS, achievable_power, peak_power
 from ..physics.sensor import SensorReading
 from ..physics.system import GimbalSystem
 from ..physics.tick import advance
+from ..radiometry.presets import link_constants
 
 #: Bounds of the vehicle's readings in the observation (indices 2-6): gyro z [rad/s],
 #: DVL x, y [m/s], encoder [rad], LOS rate [rad/s].
@@ -114,6 +115,9 @@ class LinkAlignEnv(gym.Env, EzPickle):
         acquisition: how the shipped policy acquires the link (``warm-up`` or
             ``minimum-time``, as ``ledsim run --acquisition``); the env's own dynamics
             do not depend on it.
+        link, water, attenuation, bit_rate: the physical link (``ledsim run --link``,
+            ``--water``, ``--attenuation`` [1/m], ``--bit-rate`` [bit/s]); ``paper``: the
+            paper's bench. ``distance`` is then in metres of water too.
     """
 
     metadata = {"render_modes": ["rgb_array"], "render_fps": 100}
@@ -127,12 +131,16 @@ class LinkAlignEnv(gym.Env, EzPickle):
                  integrator: str = WorldPart.integrator, scene: str | None = None,
                  imu: bool = EstimatorPart.imu,
                  station_keeping: bool = WorldPart.station_keeping,
-                 acquisition: str = TaskPart.acquisition):
+                 acquisition: str = TaskPart.acquisition, link: str = WorldPart.link,
+                 water: str | None = WorldPart.water,
+                 attenuation: float | None = WorldPart.attenuation,
+                 bit_rate: float | None = WorldPart.bit_rate):
         # Pickles as its constructor arguments (MuJoCo's model does not pickle), as
         # Gymnasium's MuJoCo environments do: the copy is a new environment.
         EzPickle.__init__(self, scenario, distance, noise_scale, disturbances, torque_limit,
                           frame_skip, phi0_range, render_mode, width, height, camera,
-                          integrator, scene, imu, station_keeping, acquisition)
+                          integrator, scene, imu, station_keeping, acquisition, link, water,
+                          attenuation, bit_rate)
         if render_mode not in (None, "rgb_array"):
             raise ValueError(f"render_mode={render_mode!r}: use None or 'rgb_array'")
         if int(frame_skip) < 1:
@@ -141,16 +149,20 @@ class LinkAlignEnv(gym.Env, EzPickle):
             disturbances = (disturbances,)
         self.cfg = RunConfig.of(
             WorldPart(distance, torque_limit, noise_scale, scene, integrator,
-                      bool(station_keeping)),
+                      bool(station_keeping), link=link, water=water,
+                      attenuation=attenuation, bit_rate=bit_rate),
             TaskPart(scenario=scenario or TaskPart.scenario, disturbances=tuple(disturbances),
                      acquisition=acquisition),
-            EstimatorPart(imu=bool(imu)))
+            # The env needs no estimator; its policy names its own (on a physical link
+            # the shipped KKL does not serve: docs/link.md).
+            EstimatorPart(imu=bool(imu),
+                          estimator=EstimatorPart.estimator if link == "paper" else "ekf"))
         self.cfg.validate()
         world_config = self.cfg.world_config()
         Te = world_config.timestep * int(frame_skip)
         if Te != world_config.constants.Te:
-            world_config = replace(world_config, constants=LinkConstants(distance=distance,
-                                                                          Te=Te))
+            world_config = replace(world_config, constants=link_constants(
+                link, distance, water, attenuation, LinkConstants(Te=Te)))
         self.system = GimbalSystem(world_config)
         self.world = self.system.world
         self.model, self.data = self.world.model, self.world.data

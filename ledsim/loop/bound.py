@@ -40,7 +40,11 @@ def run_terms(res, u: np.ndarray, measured: np.ndarray, model, constants, noise)
     gain = transmitter_gain(res.distance, res.emission_angle, constants) * res.visible_fraction
     H = layout_power_jacobian(1.0, constants.layout.angle(x), constants) * gain[:, :, None]
     F = model.f_jacobian(x, u[:, None])
-    terms = trajectory_terms(F, H, noise.std_at() ** 2,
+    # A physical receiver's noise at each step's clean powers (the information a
+    # signal-dependent variance itself carries is left out: it is small beside the mean's).
+    var = noise.std_at(res.power_clean) ** 2 if noise.signal_dependent else \
+        noise.std_at() ** 2
+    terms = trajectory_terms(F, H, var,
                              process_information(model.process_noise_std), measured)
     # The estimators are not told the start: the prior is their training box's.
     return {**terms.to_arrays(), "prior": box_prior(model.domain_halfwidth)}

@@ -3,15 +3,13 @@ and the other choices are in :mod:`ledsim.loop.registry`)."""
 
 from __future__ import annotations
 
-import math
 from dataclasses import asdict, dataclass, fields, replace
 
-from ..config import PAPER_DISTANCE, LinkConstants, NavigationNoise
-from ..errors import LedsimError
-from ..keyvalues import settings_of
-from ..physics.disturbances import check_timing, parse_disturbance
+from ..config import PAPER_DISTANCE, NavigationNoise
+from ..physics.disturbances import parse_disturbance
 from ..physics.scene import WorldConfig
 from ..physics.vehicle import StationKeeping
+from ..radiometry.presets import link_constants, preset_named
 from ..scenario import Scenario
 from .registry import (  # noqa: F401 (re-exported)
     ACQUISITIONS,
@@ -24,19 +22,7 @@ from .registry import (  # noqa: F401 (re-exported)
     PHYSICS_SCENARIOS,
     peak_snr,
 )
-
-
-def navigation_noise(settings: tuple[str, ...]) -> NavigationNoise:
-    """:class:`~ledsim.config.NavigationNoise` with ``key=value`` ``settings`` applied;
-    a bad key or value raises :class:`LedsimError` naming it."""
-    return settings_of(NavigationNoise, settings, "--imu-noise", LedsimError,
-                       integers=("encoder_bits",))
-
-
-def keeping_gains(settings: tuple[str, ...]) -> StationKeeping:
-    """:class:`~ledsim.physics.vehicle.StationKeeping` with ``key=value`` ``settings``
-    applied; a bad key or value raises :class:`LedsimError` naming it."""
-    return settings_of(StationKeeping, settings, "--station-keeping-gain", LedsimError)
+from .validation import keeping_gains, navigation_noise, validate_run  # noqa: F401
 
 
 @dataclass(frozen=True)
@@ -56,6 +42,11 @@ class WorldPart:
             datasheet figures).
         station_keeping_gains: ``key=value`` settings of the station keeping's gains
             (:class:`~ledsim.physics.vehicle.StationKeeping`'s fields).
+        link: the link preset (:data:`ledsim.radiometry.presets.LINK_PRESETS`):
+            ``paper``, the paper's bench, or a real LED modem.
+        water: the water type (None: the preset's); ``attenuation``: its beam
+            attenuation c instead [1/m] (None: the type's).
+        bit_rate: the data's bit rate [bit/s] (None: the preset's).
     """
 
     distance: float = PAPER_DISTANCE
@@ -66,6 +57,10 @@ class WorldPart:
     station_keeping: bool = True
     imu_noise: tuple[str, ...] = ()
     station_keeping_gains: tuple[str, ...] = ()
+    link: str = "paper"
+    water: str | None = None
+    attenuation: float | None = None
+    bit_rate: float | None = None
 
     def navigation_noise(self) -> NavigationNoise:
         """The vehicle's sensors' noise: the defaults with ``imu_noise`` applied."""
@@ -80,7 +75,8 @@ class WorldPart:
         Te is the link constants' (5 physics steps of 2 ms)."""
         extra = {} if self.scene is None else {"xml": self.scene}
         d = self.distance if distance is None else distance
-        return WorldConfig(constants=LinkConstants(distance=d),
+        return WorldConfig(constants=link_constants(self.link, d, self.water,
+                                                    self.attenuation),
                            torque_limit=self.torque_limit, integrator=self.integrator,
                            **extra)
 
@@ -200,6 +196,10 @@ class RunConfig:
     window: float | None = ExecutionPart.window
     initial_angle: float | None = TaskPart.initial_angle
     acquisition: str = TaskPart.acquisition
+    link: str = WorldPart.link
+    water: str | None = WorldPart.water
+    attenuation: float | None = WorldPart.attenuation
+    bit_rate: float | None = WorldPart.bit_rate
 
     @classmethod
     def of(cls, world: WorldPart = WorldPart(), task: TaskPart = TaskPart(),
@@ -215,45 +215,13 @@ class RunConfig:
     execution = _PartView(ExecutionPart)
 
     def validate(self) -> None:
-        for flag, value, registry in (("scenario", self.scenario, PHYSICS_SCENARIOS),
-                                      ("estimator", self.estimator, LOOP_ESTIMATORS),
-                                      ("--omega-model", self.omega_model, OMEGA_MODELS),
-                                      ("--filter-distance", self.filter_distance,
-                                       FILTER_DISTANCES),
-                                      ("--acquisition", self.acquisition, ACQUISITIONS)):
-            if value not in registry:
-                raise LedsimError(f"unknown {flag.lstrip('-')} {value!r}: choose one of "
-                                  f"{', '.join(registry)}")
-        if self.estimator == "kkl-scheduled" and not self.supervision and \
-                not self.checkpoint and not math.isclose(self.distance, PAPER_DISTANCE):
-            raise LedsimError(f"estimator 'kkl-scheduled' with --no-supervision runs only "
-                              f"at --distance {PAPER_DISTANCE:g} (got {self.distance:g}): "
-                              "elsewhere it needs the supervisor's gain tracker")
-        if self.filter_distance == "nominal" and not self.supervision:
-            raise LedsimError("--filter-distance nominal is not allowed with "
-                              "--no-supervision: the filters then need the supervisor's "
-                              "gain tracker")
-        checks = [("--distance", self.distance, self.distance > 0, "> 0 m"),
-                  ("--torque-limit", self.torque_limit, self.torque_limit > 0, "> 0 N m"),
-                  ("--seeds", self.seeds, self.seeds >= 1, ">= 1"),
-                  ("--noise-scale", self.noise_scale, self.noise_scale > 0, "> 0"),
-                  ("--particles", self.particles, self.particles >= 1, ">= 1")]
-        if self.seconds is not None:
-            Te = LinkConstants().Te
-            checks.append(("--seconds", self.seconds, self.seconds >= Te,
-                           f">= {Te:g} s (one control period)"))
-        if self.window is not None:
-            checks.append(("--window", self.window, self.window > 0, "> 0 s"))
-        if self.initial_angle is not None:
-            checks.append(("--initial-angle", self.initial_angle,
-                           abs(self.initial_angle) <= MAX_INITIAL_ANGLE,
-                           f"in [-{MAX_INITIAL_ANGLE:g}, {MAX_INITIAL_ANGLE:g}] rad"))
-        for flag, value, ok, allowed in checks:
-            if not (ok and math.isfinite(value)):
-                raise LedsimError(f"{flag} {value!r} is not allowed: must be {allowed}")
-        check_timing([parse_disturbance(d) for d in self.disturbances], self.run_seconds)
-        navigation_noise(self.imu_noise)
-        keeping_gains(self.station_keeping_gains)
+        """Raise :class:`LedsimError` naming the first choice or value not allowed."""
+        validate_run(self)
+
+    @property
+    def data_bit_rate(self) -> float:
+        """The data's bit rate [bit/s]: ``bit_rate``, or the link preset's."""
+        return preset_named(self.link).bit_rate if self.bit_rate is None else self.bit_rate
 
     @property
     def scenario_spec(self) -> Scenario:

@@ -8,10 +8,11 @@ from dataclasses import asdict, dataclass, field
 import numpy as np
 
 from observer.metrics import pointing_loss_db, rmse
+from observer.noise import MeasurementNoise
 
 from ..config import LinkConstants
 from ..control import intensity_maximum
-from ..linkbudget import link_budget
+from ..linkbudget import BIT_RATE, link_budget, link_budget_of
 from ..optics import peak_power
 from ..results import DictAccess
 
@@ -141,7 +142,8 @@ def run_metrics(x: np.ndarray, xhat: np.ndarray, power_clean: np.ndarray, steady
                 power_max: np.ndarray | None = None,
                 noise_std: float | None = None, warmup: float = 0.0,
                 occluded: np.ndarray | None = None,
-                outside: np.ndarray | None = None) -> RunMetrics:
+                outside: np.ndarray | None = None, noise: MeasurementNoise | None = None,
+                bit_rate: float = BIT_RATE) -> RunMetrics:
     """Metrics of one run from its true state, estimate and noise-free powers.
 
     Args:
@@ -161,6 +163,8 @@ def run_metrics(x: np.ndarray, xhat: np.ndarray, power_clean: np.ndarray, steady
             the pointing loss leaves those steps out.
         outside: whether the estimator was outside its training box at each step
             (None: never).
+        noise: the run's noise object, for a link budget whose noise depends on the
+            signal (None: ``noise_std``'s); ``bit_rate``: the data's [bit/s].
     """
     Te = constants.Te
     e = rmse(xhat, x)
@@ -181,7 +185,10 @@ def run_metrics(x: np.ndarray, xhat: np.ndarray, power_clean: np.ndarray, steady
         # occluder's edge dims the beam before its nominal start).
         after = [a for a, b in events if b is None or b > event_start + 1e-9]
         delay = max(after[0] - event_start, 0.0) if after else None
-    budget = {} if noise_std is None else asdict(link_budget(p1, noise_std, Te))
+    if noise is not None:
+        budget = asdict(link_budget_of(p1, noise, Te, bit_rate))
+    else:
+        budget = {} if noise_std is None else asdict(link_budget(p1, noise_std, Te, bit_rate))
     flagged = np.zeros(len(x), bool) if lost is None else np.asarray(lost, dtype=bool)
     wrong = (np.abs(lay.angle(xhat) - lay.angle(x)) > SILENT_ERROR) & ~flagged
     after = np.arange(len(x)) * Te >= warmup

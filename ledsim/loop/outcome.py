@@ -13,6 +13,7 @@ from .. import optics
 from ..config import LinkConstants
 from ..control import receiver_peak
 from ..layout import ReceiverLayout
+from ..linkbudget import BIT_RATE
 from ..results import DictAccess
 from .bound import run_terms
 from .config import RunConfig
@@ -119,6 +120,7 @@ def outcome(res, xhat: np.ndarray, flags: np.ndarray, cfg: RunConfig, constants,
             bound = run_terms(res, u, measured, model, constants, noise)
         except BoundError:
             bound = None  # no process noise: the bound is not defined
+    noise_model, bit_rate = noise, getattr(cfg, "data_bit_rate", BIT_RATE)
     noise = noise.std
     metrics = run_metrics(res.x, xhat, res.power_clean, cfg.steady_from,
                           constants, events[0].event_end if events else None,
@@ -127,14 +129,14 @@ def outcome(res, xhat: np.ndarray, flags: np.ndarray, cfg: RunConfig, constants,
                           power_max=best, noise_std=noise,
                           warmup=cfg.scenario_spec.warmup,
                           occluded=constants.layout.reference_power(res.occluded),
-                          outside=outside)
+                          outside=outside, noise=noise_model, bit_rate=bit_rate)
     nav = navigation
     if nav is not None and len(res.t):
         metrics.hull_error_rms = horizontal_rms(nav.hull, nav.station)
         metrics.navigation_error_rms = horizontal_rms(nav.navigated, nav.hull)
     windows = None if window is None else window_metrics(
         constants.layout.reference_power(res.power_clean), best, noise, constants.Te, window,
-        *(() if nav is None else nav))
+        *(() if nav is None else nav), noise=noise_model, bit_rate=bit_rate)
     trace = Trace(res.t, res.x, xhat, res.power, res.power_clean, res.torque,
                   res.occluded, flags[:, 0], flags[:, 1], given,
                   constants.layout) if keep_trace else None

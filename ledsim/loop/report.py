@@ -11,7 +11,6 @@ import numpy as np
 
 from observer.metrics import mean_and_spread
 
-from ..linkbudget import BIT_RATE
 from ..montecarlo import run_jobs
 from ..outputs import atomic_write_bytes
 from ..physics.disturbances import parse_disturbance
@@ -41,6 +40,11 @@ class Stat(DictAccess):
         return cls(float(mean), float(spread), len(vals))
 
 
+#: Revision of ``results.json``'s layout: 2 added the physical link's keys (``link``,
+#: ``water``, ``attenuation``, ``received_power_w``) and this one.
+SCHEMA_VERSION = 2
+
+
 @dataclass
 class RunSummary(DictAccess):
     """What ``ledsim run`` writes to ``results.json`` (units as in :class:`RunMetrics`).
@@ -58,7 +62,12 @@ class RunSummary(DictAccess):
     Cramér-Rao bound over the steady window, along the seeds' true trajectories, and
     ``rmse_over_pcrb_x1``/``_x2`` the steady RMSE over it, with one Monte-Carlo standard
     error in ``rmse_over_pcrb_err_x1``/``_x2`` (:mod:`ledsim.loop.bound`; none for the
-    oracle, which reads the true state)."""
+    oracle, which reads the true state). ``link`` names the link preset (``paper``: the
+    paper's bench), ``water`` its water (None: the bench's own), ``attenuation`` the
+    power law's b [1/m] (a physical link's effective attenuation), ``received_power_w``
+    photodiode 1's mean noise-free power [W] (``mean_power`` under its old name) and
+    ``bit_rate`` the data's [bit/s] that ``snr_db``, ``ber``, ``throughput_bps`` and
+    ``fec_share`` are at; ``schema_version`` counts this layout's revisions."""
 
     scenario: str
     estimator: str
@@ -105,6 +114,11 @@ class RunSummary(DictAccess):
     rmse_over_pcrb_x2: float | None = None
     rmse_over_pcrb_err_x1: float | None = None
     rmse_over_pcrb_err_x2: float | None = None
+    link: str = "paper"
+    water: str | None = None
+    attenuation: float | None = None
+    received_power_w: Stat | None = None
+    schema_version: int = SCHEMA_VERSION
 
 
 #: The per-window metrics a summary gives over the seeds (:class:`WindowMetrics`).
@@ -122,6 +136,8 @@ def summarize_windows(outs: list[RunOutcome]) -> list[dict] | None:
 
 
 def summarize(cfg: RunConfig, outs: list[RunOutcome]) -> RunSummary:
+    constants = cfg.world_config().constants
+
     def stat(get: Callable[[RunOutcome], float | None]) -> Stat:
         return Stat.over(get(o) for o in outs)
 
@@ -145,7 +161,7 @@ def summarize(cfg: RunConfig, outs: list[RunOutcome]) -> RunSummary:
         ber=stat(lambda o: o.metrics.ber),
         throughput_bps=stat(lambda o: o.metrics.throughput_bps),
         fec_share=stat(lambda o: o.metrics.fec_share),
-        bit_rate=BIT_RATE,
+        bit_rate=cfg.data_bit_rate,
         distance_served=served(cfg),
         filter_distance=cfg.filter_distance,
         link_events=[{"seed": k, "lost_recovered": o.metrics.link_events}
@@ -161,8 +177,12 @@ def summarize(cfg: RunConfig, outs: list[RunOutcome]) -> RunSummary:
         windows=summarize_windows(outs),
         pointing_loss_db=stat(lambda o: o.metrics.pointing_loss_db),
         outside_domain_share=stat(lambda o: o.metrics.outside_domain_share),
-        **bound_summary(outs, int(round(cfg.steady_from / cfg.world_config().constants.Te)),
-                        estimates=cfg.estimator != "oracle"))
+        **bound_summary(outs, int(round(cfg.steady_from / constants.Te)),
+                        estimates=cfg.estimator != "oracle"),
+        link=cfg.link,
+        water=cfg.water if constants.link is None else constants.link.water.name,
+        attenuation=constants.attenuation,
+        received_power_w=stat(lambda o: o.metrics.mean_power))
 
 
 def _job(args) -> RunOutcome:

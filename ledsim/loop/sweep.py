@@ -39,13 +39,14 @@ BACKENDS = ("local", "ray")
 NO_DISTURBANCE = "none"
 #: Columns of ``results.csv`` that describe the cell.
 CELL_COLUMNS = ("scenario", "estimator", "disturbance", "distance", "noise_scale", "seed",
-                "seconds", "supervision", "imu", "station_keeping")
+                "seconds", "supervision", "imu", "station_keeping", "link", "water",
+                "bit_rate")
 #: Columns that measure the run (units as in :class:`~ledsim.loop.metrics.RunMetrics`).
 METRIC_COLUMNS = ("rmse_x1", "rmse_x2", "rmse_steady_x1", "rmse_steady_x2",
                   "alignment_time", "availability", "mean_power", "recovery_time",
                   "lost_share", "detection_delay", "losses", "snr_db", "ber",
                   "throughput_bps", "fec_share", "geometry_share", "hull_error_rms",
-                  "navigation_error_rms")
+                  "navigation_error_rms", "received_power_w")
 #: Columns that depend on the machine and its load: the only ones that may differ
 #: between backends or reruns.
 TIMING_COLUMNS = ("us_per_step", "realtime_factor")
@@ -57,6 +58,11 @@ def split_disturbance(cell: str) -> tuple[str, ...]:
     if cell.strip() == NO_DISTURBANCE:
         return ()
     return tuple(p for p in re.split(r"\+(?=[a-z])", cell) if p)
+
+
+#: The link's settings at their defaults stay out of a cell's key, so that a sweep
+#: folder of the paper's bench from before them resumes.
+_LINK_DEFAULTS = {"link": "paper", "water": None, "attenuation": None, "bit_rate": None}
 
 
 @dataclass(frozen=True)
@@ -73,7 +79,8 @@ class Cell:
         """Identifies the cell and every setting that changes its result."""
         common = {k: v for k, v in asdict(base).items()
                   if k not in ("seeds", "workers", "estimator", "disturbances", "distance",
-                               "noise_scale")}
+                               "noise_scale")
+                  and not (k in _LINK_DEFAULTS and v == _LINK_DEFAULTS[k])}
         return json.dumps({**asdict(self), **common}, sort_keys=True)
 
     def file_name(self, base: RunConfig) -> str:
@@ -149,7 +156,9 @@ def run_cell(job: tuple[RunConfig, Cell]) -> dict:
            "fec_share": m.fec_share, "geometry_share": m.geometry_share,
            "losses": len(m.link_events), "hull_error_rms": m.hull_error_rms,
            "navigation_error_rms": m.navigation_error_rms,
-           "us_per_step": out.us_per_step, "realtime_factor": out.realtime_factor}
+           "us_per_step": out.us_per_step, "realtime_factor": out.realtime_factor,
+           "link": cfg.link, "water": cfg.water, "bit_rate": cfg.data_bit_rate,
+           "received_power_w": m.mean_power}
     return {"version": __version__, "row": to_jsonable(row)}
 
 

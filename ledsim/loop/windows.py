@@ -11,7 +11,9 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from ..linkbudget import link_budget
+from observer.noise import MeasurementNoise
+
+from ..linkbudget import BIT_RATE, link_budget, link_budget_of
 from ..results import DictAccess
 from .metrics import availability_mask
 
@@ -51,12 +53,15 @@ def horizontal_rms(a: np.ndarray, b: np.ndarray) -> float:
 def window_metrics(p1: np.ndarray, power_max: np.ndarray, noise_std: float, Te: float,
                    window: float, hull: np.ndarray | None = None,
                    station: np.ndarray | None = None,
-                   navigated: np.ndarray | None = None) -> list[WindowMetrics]:
+                   navigated: np.ndarray | None = None, *,
+                   noise: MeasurementNoise | None = None, bit_rate: float = BIT_RATE
+                   ) -> list[WindowMetrics]:
     """The run in windows of ``window`` [s] (the last one may be shorter; a run shorter
     than a window is one window), from photodiode 1's noise-free power ``p1`` and the
     most it could receive ``power_max`` (N,) [W], the sensor noise [W] and the period
     Te [s]; with a vehicle, the true hull position ``hull`` (N, 3) [m], its ``station``
-    (3,) [m] and the ``navigated`` position (N, 3) [m]."""
+    (3,) [m] and the ``navigated`` position (N, 3) [m]. ``noise``: the run's noise
+    object (its link budget; None: ``noise_std``'s) at ``bit_rate`` [bit/s]."""
     if not window > 0:
         raise ValueError(f"window={window!r} is not allowed: must be > 0 s")
     n = len(p1)
@@ -70,7 +75,8 @@ def window_metrics(p1: np.ndarray, power_max: np.ndarray, noise_std: float, Te: 
             break
         if b < n and n - b < size // 2:
             b = n
-        budget = link_budget(p1[a:b], noise_std, Te)
+        budget = (link_budget(p1[a:b], noise_std, Te, bit_rate) if noise is None
+                  else link_budget_of(p1[a:b], noise, Te, bit_rate))
         out.append(WindowMetrics(
             a * Te, b * Te, float(np.mean(available[a:b])), budget.fec_share,
             float(np.mean(p1[a:b])),

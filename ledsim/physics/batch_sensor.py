@@ -60,7 +60,10 @@ class BatchSensor:
         self.aperture_radius = w0.config.aperture_radius
         self.margin = margin
         npd = batch.n_photodiodes
-        self.noise = np.stack([s.rng.standard_normal((steps, npd)) * s.noise_std
+        self.signal_noise = self.sensors[0].signal_noise
+        # Drawn up front, scaled now (the paper's) or at each reading's signal.
+        self.noise = np.stack([s.rng.standard_normal((steps, npd))
+                               * (1.0 if self.signal_noise else s.noise_std)
                                for s in self.sensors], axis=1)  # (steps, N, n_pd)
         self.k = 0
 
@@ -123,7 +126,13 @@ class BatchSensor:
         noise is used)."""
         b = self.batch
         clean, phi, theta, dist, vis, rays = self.clean()
-        power = clean + self.noise[self.k]
+        if self.signal_noise:
+            noise = self.sensors[0].measurement_noise
+            power = clean + self.noise[self.k] * noise.analog_std(clean)
+            if noise.digitiser is not None:
+                power = noise.digitiser.apply(power, clean)
+        else:
+            power = clean + self.noise[self.k]
         self.k += 1
         return BatchReading(power, clean, phi, theta, dist, vis, phi[:, b.reference].copy(),
                             self.incidence_rate0(), b.qpos_hinge.copy(),

@@ -87,6 +87,9 @@ class IrradianceSensor:
         self.measurement_noise = (self.constants.measurement_noise(noise_scale)
                                   if measurement_noise is None else measurement_noise)
         self.noise_std = self.measurement_noise.std if noise else 0.0
+        #: The noise depends on the signal (a physical link's receiver), and is drawn
+        #: at each reading's clean powers.
+        self.signal_noise = noise and self.measurement_noise.signal_dependent
         self.layout = self.constants.layout
         self._photodiodes = range(self.layout.n_photodiodes)
         self._reference = self.layout.reference
@@ -184,7 +187,10 @@ class IrradianceSensor:
         clean = np.array([self._clean_power_at(*g) for g in zip(*geo, strict=True)])
         dist, theta, phi, vis = (np.array(v) for v in geo)
         n, ref = len(clean), self._reference
-        power = clean + (self.rng.standard_normal(n) * self.noise_std if noise else 0.0)
+        if noise and self.signal_noise:
+            power = self.measurement_noise.measure(clean, self.rng)
+        else:
+            power = clean + (self.rng.standard_normal(n) * self.noise_std if noise else 0.0)
         w = self.world
         return SensorReading(power, clean, phi, theta, dist, vis, float(phi[ref]),
                              self.incidence_rate(ref), w.gimbal_angle, w.gimbal_rate,

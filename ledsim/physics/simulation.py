@@ -176,7 +176,9 @@ def simulate(world: LinkWorld, sensor: IrradianceSensor, seconds: float,
         hull[k] = world.hull_pos
         applied[k] = advance(world, disturbances, u, t0 + (k + 1) * Te, vehicle)
     clean = sensor.clean_power(geo[:, 0], geo[:, 1], geo[:, 2], geo[:, 3])
-    if power is None:
+    if power is None and sensor.signal_noise:
+        power = sensor.measurement_noise.measure(clean, sensor.rng)
+    elif power is None:
         power = clean + sensor.rng.standard_normal(clean.shape) * sensor.noise_std
     return SimulationResult.from_steps(t0 + np.arange(n) * Te, geo, state, gimbal, applied,
                                        power, clean, hull, lay)

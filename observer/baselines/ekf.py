@@ -22,14 +22,16 @@ class ExtendedKalmanFilter(GaussianFilter):
         ok = usable_mask(self.system, y)
         if ok.any():
             H = self.system.h_jacobian(self.x)[ok]
-            innov = (y - self.system.h(self.x))[ok]
-            S = H @ self.P @ H.T + self.R[np.ix_(ok, ok)]
+            y_pred = self.system.h(self.x)
+            innov = (y - y_pred)[ok]
+            R = self.R_at(y_pred, ok)
+            S = H @ self.P @ H.T + R
             if self.diverged(innov, S):
                 return self.x.copy()
             K = np.linalg.solve(S, H @ self.P).T
             self.x = self.x + K @ innov
             IKH = np.eye(self.x.size) - K @ H
-            self.P = IKH @ self.P @ IKH.T + K @ self.R[np.ix_(ok, ok)] @ K.T  # Joseph form
+            self.P = IKH @ self.P @ IKH.T + K @ R @ K.T  # Joseph form
         return self.x.copy()
 
     def predict(self, u) -> None:

@@ -42,6 +42,7 @@ class ParticleFilter(Estimator):
         self.jitter = jitter
         self.lost_chi2 = lost_chi2
         self.inv_R = 1.0 / system.measurement_noise_std**2
+        self._log_var = None
         d = system.n_state
         self.bandwidth = jitter * (4.0 / (n_particles * (d + 2))) ** (1.0 / (d + 4))
         self.reset()
@@ -68,6 +69,8 @@ class ParticleFilter(Estimator):
                 self.particles[fresh] = self.system.sample_domain(self.rng, k)
                 self.logw[fresh] = self.logw.max()
                 chi2 = self._chi2(y, ok)
+            if self._log_var is not None:
+                chi2 = chi2 + self._log_var
             self.logw = self.logw - 0.5 * chi2
         self.logw -= self.logw.max()
         w = np.exp(self.logw)
@@ -78,8 +81,17 @@ class ParticleFilter(Estimator):
         return estimate
 
     def _chi2(self, y, ok) -> np.ndarray:
-        r = self.system.h(self.particles)[:, ok] - y[ok]
-        return r**2 @ self.inv_R[ok]
+        """The normalised squared residual r^2 / var of ``y`` per particle (each
+        particle's own R where the noise depends on the output; then
+        ``self._log_var`` keeps the log-determinants the likelihood adds)."""
+        h = self.system.h(self.particles)
+        r = h[:, ok] - y[ok]
+        noise = self.system.measurement_noise
+        if noise is None or not noise.signal_dependent:
+            return r**2 @ self.inv_R[ok]
+        var = noise.std_at(h[:, ok]) ** 2 * self.inv_R[ok]  # over the floor's
+        self._log_var = np.sum(np.log(var), axis=1)
+        return np.sum(r**2 * self.inv_R[ok] / var, axis=1)
 
     def _resample(self, w) -> None:
         n = self.n_particles

@@ -53,11 +53,13 @@ class UnscentedKalmanFilter(GaussianFilter):
         ok = usable_mask(self.system, y)
         if ok.any():
             X = self.sigma_points()
-            Y = self.system.h(X)[:, ok]
+            Y_all = self.system.h(X)
+            Y = Y_all[:, ok]
             y_mean = self.Wm @ Y
             dY = Y - y_mean
             dX = X - self.x
-            S = (self.Wc * dY.T) @ dY + self.R[np.ix_(ok, ok)]
+            S = (self.Wc * dY.T) @ dY + (self.R_at(self.Wm @ Y_all, ok) if self.signal_noise
+                                          else self.R[np.ix_(ok, ok)])
             C = (self.Wc * dX.T) @ dY
             if self.diverged(y[ok] - y_mean, S):
                 return self.x.copy()

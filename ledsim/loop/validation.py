@@ -1,0 +1,98 @@
+"""Checks of a run's configuration: every choice in its registry, every number in its
+physical range, refused in one line naming the value and what is allowed."""
+
+from __future__ import annotations
+
+import math
+
+from ..config import PAPER_DISTANCE, LinkConstants, NavigationNoise
+from ..errors import LedsimError
+from ..keyvalues import settings_of
+from ..physics.disturbances import check_timing, parse_disturbance
+from ..physics.vehicle import StationKeeping
+from ..radiometry.presets import LINK_PRESETS
+from ..radiometry.water import WATER_TYPES
+from .registry import (
+    ACQUISITIONS,
+    FILTER_DISTANCES,
+    LOOP_ESTIMATORS,
+    MAX_INITIAL_ANGLE,
+    OMEGA_MODELS,
+    PHYSICS_SCENARIOS,
+)
+
+
+def navigation_noise(settings: tuple[str, ...]) -> NavigationNoise:
+    """:class:`~ledsim.config.NavigationNoise` with ``key=value`` ``settings`` applied;
+    a bad key or value raises :class:`LedsimError` naming it."""
+    return settings_of(NavigationNoise, settings, "--imu-noise", LedsimError,
+                       integers=("encoder_bits",))
+
+
+def keeping_gains(settings: tuple[str, ...]) -> StationKeeping:
+    """:class:`~ledsim.physics.vehicle.StationKeeping` with ``key=value`` ``settings``
+    applied; a bad key or value raises :class:`LedsimError` naming it."""
+    return settings_of(StationKeeping, settings, "--station-keeping-gain", LedsimError)
+
+
+#: The estimators whose shipped observers are the paper's bench's.
+KKL_ON_BENCH = ("kkl", "kkl-scheduled", "kkl-bank")
+
+
+def validate_run(cfg) -> None:
+    """Raise :class:`LedsimError` naming the first thing ``cfg`` (a
+    :class:`~ledsim.loop.config.RunConfig`) does not allow."""
+    for flag, value, registry in (("scenario", cfg.scenario, PHYSICS_SCENARIOS),
+                                  ("estimator", cfg.estimator, LOOP_ESTIMATORS),
+                                  ("--omega-model", cfg.omega_model, OMEGA_MODELS),
+                                  ("--filter-distance", cfg.filter_distance,
+                                   FILTER_DISTANCES),
+                                  ("--acquisition", cfg.acquisition, ACQUISITIONS),
+                                  ("--link", cfg.link, LINK_PRESETS)):
+        if value not in registry:
+            raise LedsimError(f"unknown {flag.lstrip('-')} {value!r}: choose one of "
+                              f"{', '.join(registry)}")
+    if cfg.water is not None and cfg.water not in WATER_TYPES:
+        raise LedsimError(f"unknown water {cfg.water!r}: choose one of "
+                          f"{', '.join(WATER_TYPES)}")
+    if cfg.estimator in KKL_ON_BENCH and cfg.link != "paper" and not cfg.checkpoint:
+        raise LedsimError(f"estimator {cfg.estimator!r} has no shipped observer for --link "
+                          f"{cfg.link} (the shipped KKLs are trained on the paper's bench): "
+                          "use --estimator ekf, ukf, pf or oracle, or a --checkpoint "
+                          "trained on that link")
+    if cfg.estimator == "kkl-scheduled" and not cfg.supervision and \
+            not cfg.checkpoint and not math.isclose(cfg.distance, PAPER_DISTANCE):
+        raise LedsimError(f"estimator 'kkl-scheduled' with --no-supervision runs only "
+                          f"at --distance {PAPER_DISTANCE:g} (got {cfg.distance:g}): "
+                          "elsewhere it needs the supervisor's gain tracker")
+    if cfg.filter_distance == "nominal" and not cfg.supervision:
+        raise LedsimError("--filter-distance nominal is not allowed with "
+                          "--no-supervision: the filters then need the supervisor's "
+                          "gain tracker")
+    checks = [("--distance", cfg.distance, cfg.distance > 0, "> 0 m"),
+              ("--torque-limit", cfg.torque_limit, cfg.torque_limit > 0, "> 0 N m"),
+              ("--seeds", cfg.seeds, cfg.seeds >= 1, ">= 1"),
+              ("--noise-scale", cfg.noise_scale, cfg.noise_scale > 0, "> 0"),
+              ("--particles", cfg.particles, cfg.particles >= 1, ">= 1")]
+    if cfg.seconds is not None:
+        Te = LinkConstants().Te
+        checks.append(("--seconds", cfg.seconds, cfg.seconds >= Te,
+                       f">= {Te:g} s (one control period)"))
+    if cfg.window is not None:
+        checks.append(("--window", cfg.window, cfg.window > 0, "> 0 s"))
+    if cfg.initial_angle is not None:
+        checks.append(("--initial-angle", cfg.initial_angle,
+                       abs(cfg.initial_angle) <= MAX_INITIAL_ANGLE,
+                       f"in [-{MAX_INITIAL_ANGLE:g}, {MAX_INITIAL_ANGLE:g}] rad"))
+    if cfg.attenuation is not None:
+        checks.append(("--attenuation", cfg.attenuation, 0 <= cfg.attenuation <= 100,
+                       "in [0, 100] 1/m"))
+    if cfg.bit_rate is not None:
+        checks.append(("--bit-rate", cfg.bit_rate, 0 < cfg.bit_rate <= 1e10,
+                       "in (0, 1e10] bit/s"))
+    for flag, value, ok, allowed in checks:
+        if not (ok and math.isfinite(value)):
+            raise LedsimError(f"{flag} {value!r} is not allowed: must be {allowed}")
+    check_timing([parse_disturbance(d) for d in cfg.disturbances], cfg.run_seconds)
+    navigation_noise(cfg.imu_noise)
+    keeping_gains(cfg.station_keeping_gains)

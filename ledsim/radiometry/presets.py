@@ -1,0 +1,151 @@
+"""The link presets of ``--link``: the paper's bench and real LED modems built from
+their public figures.
+
+Each real preset names what its maker or its authors published (the range, the bit
+rate, the water, the LED power) and, for what they did not, the representative part it
+assumes. ``scripts/link_presets.py`` computes each one's range at the FEC limit against
+its published range (``docs/link.md``).
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, field
+
+from ..config import PAPER_DISTANCE, LinkConstants
+from ..errors import LedsimError
+from .hardware import DETECTORS, ReceiverOptics, Transmitter
+from .link import RadiometricLink
+from .water import WATER_TYPES, Water, water_named
+
+
+@dataclass(frozen=True)
+class PublishedFigure:
+    """A published range: ``bit_rate`` [bit/s] carried to ``range`` [m] in ``water``
+    (a water type's name, or ``visibility V m``), and what the preset does with it:
+    ``set`` (a parameter was chosen to meet it), ``check`` (computed from the
+    hardware, compared) or ``predict`` (held out: computed after the ``set`` one)."""
+
+    range: float
+    bit_rate: float
+    water: str
+    use: str
+    source: str
+
+
+@dataclass(frozen=True)
+class LinkPreset:
+    """One ``--link``: its hardware (None: the paper's bench), its default distance [m],
+    bit rate [bit/s] and water, and its published figures."""
+
+    name: str
+    description: str
+    transmitter: Transmitter | None = None
+    detector: str | None = None
+    optics: ReceiverOptics | None = None
+    distance: float = PAPER_DISTANCE
+    bit_rate: float = 1e3
+    water: str = "clear-ocean"
+    published: tuple[PublishedFigure, ...] = field(default_factory=tuple)
+
+    @property
+    def physical(self) -> bool:
+        return self.transmitter is not None
+
+    def link(self, water: Water, depth: float = 10.0, surface_irradiance: float = 0.0
+             ) -> RadiometricLink:
+        """The physical link in ``water``."""
+        if not self.physical:
+            raise LedsimError(f"link {self.name!r} is the paper's bench, not a physical link")
+        return RadiometricLink(self.name, self.transmitter, DETECTORS[self.detector],
+                               self.optics, water, depth, surface_irradiance)
+
+
+_AQUA = ("Doniec, Vasilescu, Chitre, Detweiler, Hoffmann-Kuhnt and Rus, 'AquaOptical: a "
+         "lightweight device for high-rate long-range underwater point-to-point "
+         "communication', OCEANS 2009 (MIT 1721.1/59310)")
+_LUMA = "Hydromea LUMA product figures (over 50 m at 500 kbit/s, 2-5 W optical)"
+_BLUECOMM = ("Sonardyne BlueComm 200 (450 nm LEDs): 12.5 Mbit/s video to 88 m in a 2015 "
+             "sea trial")
+
+#: The presets of ``--link``.
+LINK_PRESETS = {p.name: p for p in (
+    LinkPreset("paper", "the paper's bench: 8.5 cm, about 1 W on a photodiode, a fixed "
+               "noise of 32 mW (docs/model.md)", bit_rate=1e3),
+    LinkPreset(
+        "aquaoptical",
+        "AquaOptical long-range modem (MIT, 2009): blue LEDs to a Si photodiode",
+        Transmitter(1.66, 470.0, math.radians(20.0),
+                    "LED power set on the 30 m clear-water figure (scripts/link_presets.py "
+                    "--calibrate); 470 nm and a 20 deg beam assumed (royal-blue LEDs with "
+                    "reflectors)"),
+        "si-pin",
+        ReceiverOptics(1e-4, math.radians(30.0), 0.9, 40.0,
+                       "bare 1 cm^2 photodiode behind a flat window; 30 deg half-power "
+                       "field assumed"),
+        distance=20.0, bit_rate=1.2e6, water="clear-ocean",
+        published=(PublishedFigure(30.0, 1.2e6, "clear-ocean", "set", _AQUA),
+                   PublishedFigure(9.0, 0.6e6, "visibility 3 m", "predict", _AQUA))),
+    LinkPreset(
+        "luma",
+        "Hydromea LUMA class modem: 450 nm LEDs, a wide beam, a Si APD",
+        Transmitter(3.5, 450.0, math.radians(30.0),
+                    "3.5 W: the middle of the published 2-5 W; 30 deg beam assumed"),
+        "si-apd",
+        ReceiverOptics(math.pi * 0.005**2, math.radians(30.0), 0.9, 40.0,
+                       "bare APD behind a flat window (no lens is published); 30 deg "
+                       "half-power field assumed"),
+        distance=30.0, bit_rate=5e5, water="clear-ocean",
+        published=(PublishedFigure(50.0, 5e5, "clear-ocean", "check", _LUMA),)),
+    LinkPreset(
+        "bluecomm-200",
+        "Sonardyne BlueComm 200 class modem: 450 nm LED array to a photomultiplier",
+        Transmitter(10.0, 450.0, math.radians(30.0),
+                    "10 W optical and a 30 deg beam assumed (a multi-LED array)"),
+        "pmt",
+        ReceiverOptics(math.pi * 0.004**2, math.radians(30.0), 0.8, 20.0,
+                       "PMT window, 30 deg half-power field assumed"),
+        distance=50.0, bit_rate=12.5e6, water="clear-ocean",
+        published=(PublishedFigure(88.0, 12.5e6, "clear-ocean", "check", _BLUECOMM),)),
+)}
+
+
+def preset_named(name: str) -> LinkPreset:
+    try:
+        return LINK_PRESETS[name]
+    except KeyError:
+        raise LedsimError(f"unknown link {name!r}: choose one of "
+                          f"{', '.join(LINK_PRESETS)}") from None
+
+
+def water_of(preset: LinkPreset, water: str | None = None,
+             attenuation: float | None = None) -> Water:
+    """The run's water: ``water`` (a type, default the preset's), at beam attenuation
+    ``attenuation`` [1/m] when one is set."""
+    w = water_named(preset.water if water is None else water)
+    if attenuation is None:
+        return w
+    return w.with_attenuation(attenuation, preset.transmitter.wavelength
+                              if preset.physical else None)
+
+
+def link_constants(name: str = "paper", distance: float | None = None,
+                   water: str | None = None, attenuation: float | None = None,
+                   base: LinkConstants | None = None) -> LinkConstants:
+    """The constants of link ``name`` at ``distance`` [m] (default the preset's) in
+    ``water`` and ``attenuation``. The paper's bench with neither is exactly
+    ``LinkConstants(distance=...)``; with them its b is the water's c (Beer-Lambert,
+    the paper's form)."""
+    preset = preset_named(name)
+    d = preset.distance if distance is None else distance
+    base = LinkConstants() if base is None else base
+    if not preset.physical:
+        c = base.with_(distance=d)
+        if water is None and attenuation is None:
+            return c
+        return c.with_(attenuation=water_of(preset, water, attenuation).attenuation)
+    return preset.link(water_of(preset, water, attenuation)).constants(d, base)
+
+
+__all__ = ["LINK_PRESETS", "LinkPreset", "PublishedFigure", "WATER_TYPES", "link_constants",
+           "preset_named", "water_of"]

@@ -1,0 +1,120 @@
+"""The link presets against their published ranges, and the held-out prediction.
+
+    python scripts/link_presets.py            # a few seconds; writes docs/link.md
+
+For each real preset (``ledsim.radiometry.presets``): the range at the FEC limit
+computed from its hardware, in the water and at the bit rate of each published figure,
+with the effective attenuation (the model) and with Beer-Lambert's beam attenuation c
+(the pessimistic bound). A figure marked ``set`` was used to choose one parameter (the
+script solves for it: ``--calibrate`` prints the value the preset should hold); a
+``predict`` figure is held out: computed after the ``set`` one fixed that parameter.
+No random numbers: the budget is closed-form.
+"""
+
+from __future__ import annotations
+
+import argparse
+import dataclasses
+import math
+from pathlib import Path
+
+from ledsim.linkbudget import FEC_LIMIT
+from ledsim.outputs import atomic_write_text
+from ledsim.radiometry.budget import range_at_fec
+from ledsim.radiometry.presets import LINK_PRESETS, LinkPreset, PublishedFigure
+from ledsim.radiometry.water import WATER_TYPES, Water
+
+ROOT = Path(__file__).resolve().parent.parent
+#: What water of a given visibility is taken to be like (its albedo b / c): turbid,
+#: as a harbour's (the AquaOptical trial's 3 m visibility water was a harbour's).
+VISIBILITY_LIKE = "harbour"
+
+
+def water_of_figure(f: PublishedFigure) -> Water:
+    if f.water.startswith("visibility"):
+        return Water.from_visibility(float(f.water.split()[1]), WATER_TYPES[VISIBILITY_LIKE])
+    return WATER_TYPES[f.water]
+
+
+def computed_range(p: LinkPreset, f: PublishedFigure, beer_lambert: bool = False) -> float:
+    link = p.link(water_of_figure(f))
+    c = link.constants(1.0)
+    if beer_lambert:
+        c = c.with_(attenuation=link.water_at_led.attenuation)
+    return range_at_fec(c, f.bit_rate)
+
+
+def calibrate(p: LinkPreset, f: PublishedFigure, beer_lambert: bool = False) -> float:
+    """The LED power [W] that puts the range at ``f``'s (bisection, log scale)."""
+    lo, hi = 1e-4, 1e3
+    for _ in range(80):
+        mid = math.sqrt(lo * hi)
+        q = dataclasses.replace(p, transmitter=dataclasses.replace(p.transmitter,
+                                                                   optical_power=mid))
+        lo, hi = (mid, hi) if computed_range(q, f, beer_lambert) < f.range else (lo, mid)
+    return math.sqrt(lo * hi)
+
+
+def rows() -> list[str]:
+    out = ["| preset | published | use | water (c at the LED) | bit rate [bit/s] | "
+           "computed range [m] | over published | Beer-Lambert c [m] | over published |",
+           "|---|---|---|---|---|---|---|---|---|"]
+    for p in LINK_PRESETS.values():
+        if not p.physical:
+            continue
+        for f in p.published:
+            w = p.link(water_of_figure(f)).water_at_led
+            r, rb = computed_range(p, f), computed_range(p, f, True)
+            out.append(f"| {p.name} | {f.range:g} m | {f.use} | {f.water} "
+                       f"({w.attenuation:.3f}/m) | {f.bit_rate:.3g} | {r:.1f} | "
+                       f"{r / f.range:.2f} | {rb:.1f} | {rb / f.range:.2f} |")
+    return out
+
+
+def held_out(p: LinkPreset) -> list[str]:
+    """The held-out figure under each model, each calibrated on the ``set`` one."""
+    setf = next(f for f in p.published if f.use == "set")
+    lines = []
+    for beer, label in ((False, "effective attenuation"), (True, "Beer-Lambert c")):
+        power = calibrate(p, setf, beer)
+        q = dataclasses.replace(p, transmitter=dataclasses.replace(p.transmitter,
+                                                                   optical_power=power))
+        for f in p.published:
+            if f.use == "predict":
+                r = computed_range(q, f, beer)
+                lines.append(f"| {p.name} | {label} | {power:.3g} W | {f.range:g} m in "
+                             f"{f.water} at {f.bit_rate:.3g} bit/s | {r:.1f} m | "
+                             f"{r / f.range:.2f} |")
+    return lines
+
+
+def main() -> None:
+    ap = argparse.ArgumentParser(description=__doc__)
+    ap.add_argument("--calibrate", action="store_true",
+                    help="print the LED power each preset's 'set' figure asks for")
+    args = ap.parse_args()
+    if args.calibrate:
+        for p in LINK_PRESETS.values():
+            for f in p.published:
+                if f.use == "set":
+                    print(f"{p.name}: optical_power = {calibrate(p, f):.4g} W")
+        return
+    table = rows()
+    held = ["| preset | model | LED power set on the 30 m figure | held-out figure | "
+            "predicted range | over published |", "|---|---|---|---|---|---|"]
+    for p in LINK_PRESETS.values():
+        if p.physical and any(f.use == "predict" for f in p.published):
+            held += held_out(p)
+    text = (ROOT / "docs" / "link.md").read_text() if (ROOT / "docs" / "link.md").exists() \
+        else ""
+    marker = "<!-- generated by scripts/link_presets.py -->"
+    head = text.split(marker)[0] if marker in text else text
+    body = [marker, "", "### Ranges at the FEC limit (BER "
+            f"{FEC_LIMIT:g}), each preset's hardware against its published figures", "",
+            *table, "", "### The held-out prediction", "", *held, ""]
+    atomic_write_text(ROOT / "docs" / "link.md", head + "\n".join(body))
+    print("\n".join(table + [""] + held))
+
+
+if __name__ == "__main__":
+    main()
