@@ -119,6 +119,15 @@ def peak_power(c: LinkConstants) -> float:
     return float(np.max(photodiode_power(c.distance, c.theta, phi, c)))
 
 
+def nominal_noise_std(c: LinkConstants) -> float:
+    """The pointing samples' noise at the configured distance's peak power [W]: the
+    paper's constant noise, or a physical receiver's at that signal."""
+    noise = c.measurement_noise()
+    if not noise.signal_dependent:
+        return c.measurement_noise_std
+    return float(noise.std_at(np.array([peak_power(c)]))[0])
+
+
 #: Measured powers beyond this many noise standard deviations below zero, or above twice
 #: the peak, cannot come from the link: estimators treat them as missing.
 IMPOSSIBLE_SIGMAS = 20.0

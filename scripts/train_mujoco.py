@@ -3,6 +3,11 @@ into assets/checkpoints/kkl_mujoco_d<d>.pt.
 
     python scripts/train_mujoco.py [--distances 0.085] [--noise-scales 1] [--samples 200000]
 
+``--lens`` trains the gain-scheduled KKL of the physical presets (``--link aquaoptical``
+and the others): the bench with their receiver's response and relative noise
+(``ledsim.radiometry.presets.kkl_reference_constants``), saved as
+kkl_mujoco_scheduled_lens_d0.085.pt.
+
 ``--bank`` trains the bank the closed loop runs at every distance
 (``ledsim.loop.estimation.BANK``): the observers of d = 0.085 m for 1x, 3x, 6x and 13x
 the nominal measurement noise (what the noise becomes, rescaled to the reference gain,
@@ -18,6 +23,7 @@ from ledsim.cli.options import WORKERS
 from ledsim.loop.estimation import BANK_NOISE, REFERENCE_DISTANCE
 from ledsim.loop.training import train_mujoco_observer
 from ledsim.outputs import save_checkpoint
+from ledsim.radiometry.presets import kkl_reference_constants
 from ledsim.resources import shipped_checkpoint
 
 
@@ -31,7 +37,19 @@ def main() -> None:
     ap.add_argument("--threads", type=WORKERS, default=min(os.cpu_count() or 1, 64),
                     help="threads that step the transitions' physics (mujoco.rollout; "
                          "default: every core)")
+    ap.add_argument("--lens", action="store_true",
+                    help="train the physical presets' gain-scheduled KKL (overrides the above)")
     args = ap.parse_args()
+    if args.lens:
+        obs, rep, extra = train_mujoco_observer(
+            REFERENCE_DISTANCE, 1.0, "scheduled", args.samples, threads=args.threads,
+            progress=True, constants=kkl_reference_constants())
+        path = save_checkpoint(obs, shipped_checkpoint(REFERENCE_DISTANCE, "mujoco",
+                                                       design="scheduled-lens"), extra=extra)
+        print(f"physical presets' scheduled KKL: {args.samples} MuJoCo transitions in "
+              f"{extra['data']['seconds']:.0f} s, training {rep.seconds:.0f} s, "
+              f"L_dyn={rep.loss_dyn:.2e}, L_recon={rep.loss_recon:.2e} -> {path}")
+        return
     if args.bank:
         args.distances, args.noise_scales = [REFERENCE_DISTANCE], list(BANK_NOISE)
     for d, s in [(d, s) for d in args.distances for s in args.noise_scales]:

@@ -182,6 +182,35 @@ def test_a_physical_link_runs_and_a_seed_does_not_depend_on_its_batch():
     assert alone.metrics.fec_share is not None
 
 
-def test_the_benchs_kkl_refuses_a_physical_link():
-    assert_user_error(run_cli("run", "--link", "luma", "--estimator", "kkl", "--out",
-                              "/nonexistent/x"), "no shipped observer")
+def test_the_benchs_observers_refuse_a_physical_link():
+    """The bank and the unsupervised KKL are the bench's; the physical presets ship the
+    scheduled KKL, under supervision."""
+    for extra in (["--estimator", "kkl-bank"], ["--estimator", "kkl", "--no-supervision"]):
+        assert_user_error(run_cli("run", "--link", "luma", *extra, "--out", "/nonexistent/x"),
+                          "no shipped observer")
+    assert_user_error(run_cli("run", "--link", "luma", "--estimator", "ekf",
+                              "--filter-distance", "nominal", "--out", "/nonexistent/x"),
+                      "--filter-distance nominal")
+
+
+def test_the_gain_trackers_deadband_follows_the_link():
+    from ledsim.loop.supervisor import BENCH_DEADBAND, tracker_deadband
+
+    assert tracker_deadband(LinkConstants()) == BENCH_DEADBAND
+    assert tracker_deadband(LinkConstants(distance=0.05)) == BENCH_DEADBAND
+    near, far = (tracker_deadband(link_constants("luma", d)) for d in (10.0, 60.0))
+    assert 1e-4 < near < far < BENCH_DEADBAND  # a weaker signal, a noisier gain
+
+
+def test_the_physical_kkl_runs_on_every_preset():
+    """The shipped scheduled KKL of the physical receiver loads for each preset (its
+    metadata checked against the reference world) and aligns a short run."""
+    from ledsim.loop.closed_loop import run_once
+    from ledsim.loop.config import RunConfig
+
+    for name in ("aquaoptical", "bluecomm-200"):
+        cfg = RunConfig(estimator="kkl", link=name, seconds=3.0, seeds=1)
+        cfg.validate()
+        out = run_once(cfg, 0)
+        assert out.metrics.rmse_steady["x1"] < 0.02, name
+        assert out.metrics.availability > 0.9, name

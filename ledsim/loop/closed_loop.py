@@ -26,7 +26,7 @@ from observer.oracle import Oracle
 from observer.recording import RecordingEstimator
 
 from ..control import intensity_maximum
-from ..optics import peak_power
+from ..optics import nominal_noise_std, peak_power
 from ..physics.disturbances import parse_disturbance
 from ..physics.sensor import SensorReading
 from ..physics.simulation import SimulationResult
@@ -58,7 +58,7 @@ def make_supervisor(cfg: RunConfig, system: GimbalSystem, estimator, estimator_s
     nominal noise)."""
     prior = peak_power(system.constants) / peak_power(estimator_system.constants)
     carried = (estimator_system.constants.measurement_noise_std
-               / system.constants.measurement_noise_std)
+               / nominal_noise_std(system.constants))
     return LinkSupervisor(estimator, system.constants, system.inertia,
                           warmup=cfg.scenario_spec.warmup, reacquire=reacquire,
                           gain_ratio=prior, noise_ratio=noise.scale / prior / carried,

@@ -5,11 +5,11 @@ from __future__ import annotations
 
 from dataclasses import asdict, dataclass, fields, replace
 
-from ..config import PAPER_DISTANCE, NavigationNoise
+from ..config import NavigationNoise
 from ..physics.disturbances import parse_disturbance
 from ..physics.scene import WorldConfig
 from ..physics.vehicle import StationKeeping
-from ..radiometry.presets import link_constants, preset_named
+from ..radiometry.presets import default_distance, link_constants, preset_named
 from ..scenario import Scenario
 from .registry import (  # noqa: F401 (re-exported)
     ACQUISITIONS,
@@ -30,7 +30,8 @@ class WorldPart:
     """The MuJoCo world of an experiment.
 
     Attributes:
-        distance: link distance d [m].
+        distance: link distance d [m] (None: the link preset's, 0.085 m on the paper's
+            bench).
         torque_limit: gimbal motor torque limit [N m].
         noise_scale: multiplies the measurement-noise standard deviation [-].
         scene: MJCF scene file (None: the shipped one).
@@ -49,7 +50,7 @@ class WorldPart:
         bit_rate: the data's bit rate [bit/s] (None: the preset's).
     """
 
-    distance: float = PAPER_DISTANCE
+    distance: float | None = None
     torque_limit: float = 0.05
     noise_scale: float = 1.0
     scene: str | None = None
@@ -61,6 +62,10 @@ class WorldPart:
     water: str | None = None
     attenuation: float | None = None
     bit_rate: float | None = None
+
+    def __post_init__(self) -> None:
+        if self.distance is None:  # the link preset's (0.085 m on the paper's bench)
+            object.__setattr__(self, "distance", default_distance(self.link))
 
     def navigation_noise(self) -> NavigationNoise:
         """The vehicle's sensors' noise: the defaults with ``imu_noise`` applied."""
@@ -176,7 +181,7 @@ class RunConfig:
     scenario: str = TaskPart.scenario
     estimator: str = EstimatorPart.estimator
     disturbances: tuple[str, ...] = TaskPart.disturbances
-    distance: float = WorldPart.distance
+    distance: float | None = WorldPart.distance
     torque_limit: float = WorldPart.torque_limit
     noise_scale: float = WorldPart.noise_scale
     seeds: int = ExecutionPart.seeds
@@ -200,6 +205,10 @@ class RunConfig:
     water: str | None = WorldPart.water
     attenuation: float | None = WorldPart.attenuation
     bit_rate: float | None = WorldPart.bit_rate
+
+    def __post_init__(self) -> None:
+        if self.distance is None:  # the link preset's (0.085 m on the paper's bench)
+            self.distance = default_distance(self.link)
 
     @classmethod
     def of(cls, world: WorldPart = WorldPart(), task: TaskPart = TaskPart(),

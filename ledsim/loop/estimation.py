@@ -25,6 +25,7 @@ from ..estimators import build_estimator
 from ..optics import peak_power
 from ..physics.scene import WorldConfig
 from ..physics.system import GimbalSystem, IdentifiedGimbalModel
+from ..radiometry.presets import kkl_reference_constants
 from ..resources import require_shipped_checkpoint
 from .config import RunConfig
 
@@ -47,9 +48,21 @@ KKL_ESTIMATORS = ("kkl", "kkl-scheduled", "kkl-bank")
 def served(cfg: RunConfig) -> bool:
     """Whether the run's KKL is a shipped one of the reference distance (scheduled or
     the bank) at a distance it is measured to serve (True for every other estimator,
-    and for a KKL of the user's own checkpoint)."""
+    for a KKL of the user's own checkpoint, and on a physical link, whose KKL is
+    measured across its range in docs/link_table.md)."""
     lo, hi = SERVED_DISTANCES
-    return not uses_reference(cfg) or lo <= cfg.distance <= hi
+    return not uses_reference(cfg) or cfg.link != "paper" or lo <= cfg.distance <= hi
+
+
+def reference_world(cfg: RunConfig) -> WorldConfig:
+    """The world the run's shipped KKL was trained in: the bench at
+    :data:`REFERENCE_DISTANCE`, or on a physical link the bench with the physical
+    receiver (:func:`~ledsim.radiometry.presets.kkl_reference_constants`)."""
+    # The bench's own water: the tracker takes another water's attenuation as a gain.
+    ref = replace(cfg, water=None, attenuation=None).world_config(distance=REFERENCE_DISTANCE)
+    if cfg.link == "paper":
+        return ref
+    return replace(ref, constants=kkl_reference_constants())
 
 
 def uses_reference(cfg: RunConfig) -> bool:
@@ -120,11 +133,12 @@ def kkl_members(cfg: RunConfig) -> list[KKLMember]:
     reference distance (with it); ``kkl-scheduled``: that one always (or
     ``cfg.checkpoint``, trained there); ``kkl-bank``: the shipped bank (with
     supervision). The gain tracker serves every distance from the reference one."""
-    ref = cfg.world_config(distance=REFERENCE_DISTANCE)
+    ref = reference_world(cfg)
     if cfg.estimator == "kkl-scheduled" or (cfg.estimator == "kkl" and cfg.supervision
                                             and not cfg.checkpoint):
         path = Path(cfg.checkpoint) if cfg.checkpoint else require_shipped_checkpoint(
-            REFERENCE_DISTANCE, "mujoco", design="scheduled")
+            REFERENCE_DISTANCE, "mujoco",
+            design="scheduled" if cfg.link == "paper" else "scheduled-lens")
         return [KKLMember(1.0, path, ref)]
     if cfg.checkpoint:
         return [KKLMember(1.0, Path(cfg.checkpoint), cfg.world_config())]

@@ -17,7 +17,7 @@ import functools
 from ..config import LinkConstants
 from ..control import AlignmentPID, Excitation, PaperRateDamping
 from ..estimators import ESTIMATORS
-from ..optics import peak_power
+from ..optics import nominal_noise_std, peak_power
 from ..scenario import Scenario
 
 PHYSICS_SCENARIOS = {
@@ -60,4 +60,4 @@ MIN_FAST_PEAK_SNR = 3.5
 def peak_snr(constants: LinkConstants, noise_scale: float) -> float:
     """The most one photodiode can see at the configured distance over the noise's
     standard deviation, nominal times ``noise_scale`` [-]."""
-    return peak_power(constants) / (constants.measurement_noise_std * noise_scale)
+    return peak_power(constants) / (nominal_noise_std(constants) * noise_scale)

@@ -21,7 +21,8 @@ from .estimation import bank_preset, noisier
 
 def train_mujoco_observer(distance: float = PAPER_DISTANCE, noise_scale: float = 1.0,
                           design: str | None = None, samples: int = 200_000, seed: int = 0,
-                          threads: int = 1, progress: bool = False):
+                          threads: int = 1, progress: bool = False,
+                          constants: LinkConstants | None = None):
     """(observer, training report, extra metadata for the checkpoint).
 
     Args:
@@ -33,13 +34,17 @@ def train_mujoco_observer(distance: float = PAPER_DISTANCE, noise_scale: float =
         seed: seed of the data and the random features.
         threads: threads stepping the transitions' physics (``mujoco.rollout``).
         progress: show a progress bar.
+        constants: the world's link constants (None: the bench's at ``distance``; the
+            physical presets' KKL is trained in
+            :func:`~ledsim.radiometry.presets.kkl_reference_constants`).
     """
     from observer.training import generate_transitions
 
     from ..presets import train_preset
 
-    system = GimbalSystem(noisier(WorldConfig(constants=LinkConstants(distance=distance)),
-                                  noise_scale), threads=threads)
+    constants = LinkConstants(distance=distance) if constants is None else constants
+    system = GimbalSystem(noisier(WorldConfig(constants=constants), noise_scale),
+                          threads=threads)
     # The default preset also at d = 0.2 without a bank: the low-light one lost the link
     # in the closed loop (availability 0.11 against 0.67; docs/physics.md).
     t0 = time.perf_counter()

@@ -55,11 +55,18 @@ def validate_run(cfg) -> None:
     if cfg.water is not None and cfg.water not in WATER_TYPES:
         raise LedsimError(f"unknown water {cfg.water!r}: choose one of "
                           f"{', '.join(WATER_TYPES)}")
-    if cfg.estimator in KKL_ON_BENCH and cfg.link != "paper" and not cfg.checkpoint:
-        raise LedsimError(f"estimator {cfg.estimator!r} has no shipped observer for --link "
-                          f"{cfg.link} (the shipped KKLs are trained on the paper's bench): "
-                          "use --estimator ekf, ukf, pf or oracle, or a --checkpoint "
-                          "trained on that link")
+    if cfg.link != "paper" and not cfg.checkpoint and (
+            cfg.estimator == "kkl-bank" or (cfg.estimator in KKL_ON_BENCH
+                                            and not cfg.supervision)):
+        alone = "" if cfg.supervision else " with --no-supervision"
+        raise LedsimError(f"estimator {cfg.estimator!r}{alone} has no shipped observer for "
+                          f"--link "
+                          f"{cfg.link}: on a physical link the shipped KKL is the "
+                          "gain-scheduled one under supervision (--estimator kkl), or use "
+                          "ekf, ukf, pf or oracle")
+    if cfg.link != "paper" and cfg.filter_distance == "nominal":
+        raise LedsimError("--filter-distance nominal is not allowed with a physical --link: "
+                          "it rescales the bench's noise (use configured)")
     if cfg.estimator == "kkl-scheduled" and not cfg.supervision and \
             not cfg.checkpoint and not math.isclose(cfg.distance, PAPER_DISTANCE):
         raise LedsimError(f"estimator 'kkl-scheduled' with --no-supervision runs only "

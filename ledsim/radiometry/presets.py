@@ -118,6 +118,13 @@ def preset_named(name: str) -> LinkPreset:
                           f"{', '.join(LINK_PRESETS)}") from None
 
 
+def default_distance(name: str) -> float:
+    """Preset ``name``'s default distance [m] (an unknown name: the bench's; a run's
+    validation then names it)."""
+    preset = LINK_PRESETS.get(name)
+    return PAPER_DISTANCE if preset is None else preset.distance
+
+
 def water_of(preset: LinkPreset, water: str | None = None,
              attenuation: float | None = None) -> Water:
     """The run's water: ``water`` (a type, default the preset's), at beam attenuation
@@ -147,5 +154,29 @@ def link_constants(name: str = "paper", distance: float | None = None,
     return preset.link(water_of(preset, water, attenuation)).constants(d, base)
 
 
-__all__ = ["LINK_PRESETS", "LinkPreset", "PublishedFigure", "WATER_TYPES", "link_constants",
+#: The relative noise [-] of the physical KKL's reference world: a 12-bit ADC whose
+#: range just holds twice the signal, sigma = 2 x full scale / 2^12 / sqrt(12) over the
+#: signal, 2.8e-4, and the analog noise beside it. The gain control keeps a link's
+#: pointing samples between this and ten times it; the scheduled KKL is learned for 1-16
+#: times it (``observer.scheduled.ScheduledDesign.noise_range``).
+KKL_REFERENCE_NOISE = 3e-4
+
+
+def kkl_reference_constants(base: LinkConstants | None = None) -> LinkConstants:
+    """The world the physical presets' KKL is trained in and runs against: the paper's
+    bench geometry (d = 0.085 m, about 1 W on a photodiode) with the physical receiver's
+    response g(phi) (every physical preset's: a 30 deg Gaussian) and its relative noise
+    :data:`KKL_REFERENCE_NOISE`, constant. The supervisor's gain tracker maps a run's
+    powers onto it, as it maps the bench's other distances onto 0.085 m."""
+    from ..optics import peak_power
+
+    base = LinkConstants() if base is None else base
+    response = next(p for p in LINK_PRESETS.values() if p.physical).link(
+        WATER_TYPES["clear-ocean"]).response
+    c = base.with_(distance=PAPER_DISTANCE, receiver=response)
+    return c.with_(measurement_noise_var=(KKL_REFERENCE_NOISE * peak_power(c)) ** 2)
+
+
+__all__ = ["KKL_REFERENCE_NOISE", "LINK_PRESETS", "WATER_TYPES", "LinkPreset",
+           "PublishedFigure", "default_distance", "kkl_reference_constants", "link_constants",
            "preset_named", "water_of"]
