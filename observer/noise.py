@@ -21,23 +21,27 @@ import numpy as np
 
 @dataclass(frozen=True)
 class Digitiser:
-    """An ADC behind a receiver gain stepped by decades (automatic gain control).
+    """An ADC behind a stepped receiver gain (automatic gain control).
 
-    The gain control picks the most sensitive of ``decades`` ranges whose full scale,
-    ``full_scale x 10^-j``, holds twice the clean signal; the ADC rounds to
-    ``2^bits`` steps over +-that range and clips beyond it. Above the least sensitive
-    range the receiver saturates at ``full_scale``. The gain control follows the clean
-    signal (it averages over many samples), so the step is a function of it.
+    The gain control spans ``decades`` decades in steps of ``step_ratio`` (2: the 6 dB
+    steps of a programmable-gain amplifier). It picks the most sensitive range whose
+    full scale, ``full_scale x step_ratio^-j``, holds twice the clean signal; the ADC
+    rounds to ``2^bits`` steps over +-that range and clips beyond it. Above the least
+    sensitive range the receiver saturates at ``full_scale``. The gain control follows
+    the clean signal (it averages over many samples), so the step is a function of it:
+    with 6 dB steps and 12 bits the quantisation is 2.8e-4 to 5.6e-4 of the signal.
 
     Attributes:
         bits: ADC resolution [bits].
         full_scale: the output that saturates the least sensitive range [output unit].
-        decades: number of gain ranges, a decade apart [-].
+        decades: the span of the gain control [decades].
+        step_ratio: the ratio of neighbouring ranges' full scales [-].
     """
 
     bits: int = 12
     full_scale: float = 1e-3
     decades: int = 6
+    step_ratio: float = 2.0
 
     def __post_init__(self) -> None:
         if not (isinstance(self.bits, int) and 1 <= self.bits <= 32):
@@ -47,12 +51,22 @@ class Digitiser:
         if not (isinstance(self.decades, int) and 1 <= self.decades <= 12):
             raise ValueError(f"decades={self.decades!r} is not allowed: must be an integer "
                              "in 1..12")
+        if not (1.0 < self.step_ratio <= 10.0):
+            raise ValueError(f"step_ratio={self.step_ratio!r} is not allowed: must be in "
+                             "(1, 10]")
+
+    @property
+    def n_ranges(self) -> int:
+        """Number of gain ranges [-]."""
+        return int(math.ceil(self.decades * math.log(10.0) / math.log(self.step_ratio)
+                             - 1e-9)) + 1
 
     def range_of(self, clean) -> np.ndarray:
         """Full scale of the range the gain control picks for ``clean`` [output unit]."""
         level = np.maximum(2.0 * np.abs(np.asarray(clean, dtype=float)), 1e-300)
-        j = np.clip(np.floor(np.log10(self.full_scale / level)), 0, self.decades - 1)
-        return self.full_scale * 10.0 ** -j
+        j = np.clip(np.floor(np.log(self.full_scale / level) / math.log(self.step_ratio)),
+                    0, self.n_ranges - 1)
+        return self.full_scale * self.step_ratio ** -j
 
     def step(self, clean) -> np.ndarray:
         """Quantisation step at ``clean`` [output unit]: two full scales over 2^bits."""

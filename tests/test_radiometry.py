@@ -81,10 +81,15 @@ def test_noise_terms_and_digitiser():
     n = MeasurementNoise(1e-9, 2, 1.0, shot_coefficient=1e-12)
     p = np.array([0.0, 1e-6])
     assert n.analog_std(p) == pytest.approx(np.sqrt(1e-18 + 1e-12 * p))
-    dig = Digitiser(12, 1e-3, 6)
+    dig = Digitiser(12, 1e-3, 6, step_ratio=10.0)
     # the most sensitive range that holds twice the signal, a decade apart
     assert dig.range_of(np.array([4e-4, 6e-4, 4e-5, 1e-12])) == pytest.approx(
-        [1e-3, 1e-3, 1e-4, 1e-8])
+        [1e-3, 1e-3, 1e-4, 1e-9])  # six decades below full scale
+    six_db = Digitiser(12, 1e-3, 6)  # 6 dB steps: the signal within a factor 2 of range
+    clean = np.geomspace(1e-9, 4e-4, 50)
+    top = six_db.range_of(clean)
+    assert np.all((top >= 2 * clean) & (top < 4 * clean * (1 + 1e-9)))
+    assert six_db.n_ranges == 21
     assert dig.apply(np.array([5e-3]), np.array([6e-4]))[0] == pytest.approx(1e-3)  # clips
     steps = dig.apply(np.array([1.23456e-5]), np.array([1.2e-5]))[0] / dig.step(1.2e-5)
     assert steps == pytest.approx(round(steps))

@@ -27,12 +27,12 @@ def add_world_args(p, distance_help="link distance d [m] (default: 0.085 for --l
 
 def add_link_args(p) -> None:
     """The physical link: its preset, the water and the data's bit rate."""
-    from ..radiometry.presets import LINK_PRESETS
+    from ..radiometry.presets import DEFAULT_LINK, LINK_PRESETS
     from ..radiometry.water import WATER_TYPES
 
-    p.add_argument("--link", default="paper", **choices(LINK_PRESETS),
-                   help="the link: paper (the paper's 8.5 cm bench) or a real LED modem "
-                   "(docs/link.md)")
+    p.add_argument("--link", default=DEFAULT_LINK, **choices(LINK_PRESETS),
+                   help="the link: a real LED modem (docs/link.md), or paper: the "
+                   "paper's 8.5 cm bench")
     p.add_argument("--water", default=None, **choices(WATER_TYPES),
                    help="water type (default: the preset's, clear-ocean)")
     p.add_argument("--attenuation", type=ATTENUATION, default=None, metavar="C",
@@ -44,10 +44,10 @@ def add_link_args(p) -> None:
 
 def resolved_distance(args) -> float:
     """``--distance``, or the ``--link`` preset's default distance [m]."""
-    from ..radiometry.presets import preset_named
+    from ..radiometry.presets import DEFAULT_LINK, preset_named
 
     d = getattr(args, "distance", None)
-    return preset_named(getattr(args, "link", "paper")).distance if d is None else d
+    return preset_named(getattr(args, "link", DEFAULT_LINK)).distance if d is None else d
 
 
 def add_scene_args(p) -> None:

@@ -3,8 +3,16 @@
 ==========================  =================================================
 id                          what it is
 ==========================  =================================================
-``ledsim/LinkAlign-v0``     keep the receiver gimbal aligned on the LED beam
+``ledsim/LinkAlign-v0``     keep the receiver gimbal aligned on the LED beam: the
+                            paper's 8.5 cm bench (``link="paper"``)
+``ledsim/LinkAlign-v1``     the same on a physical link: ``link="luma"`` at its
+                            30 m in clear ocean, ``ledsim run``'s default
+                            (docs/link.md); any constructor argument still
+                            overrides it
 ==========================  =================================================
+
+A new version for the new default, as Gymnasium's convention asks when results change:
+``LinkAlign-v0`` keeps its behaviour.
 """
 
 from gymnasium.envs.registration import register, registry
@@ -13,8 +21,14 @@ from .link_align import LinkAlignEnv
 from .policy import EstimatorObservation, ShippedAlignmentPolicy
 
 ENV_ID = "ledsim/LinkAlign-v0"
+#: The env on a physical link (``ledsim run``'s default link).
+ENV_ID_PHYSICAL = "ledsim/LinkAlign-v1"
 if ENV_ID not in registry:
     register(id=ENV_ID, entry_point="ledsim.envs.link_align:LinkAlignEnv",
              max_episode_steps=1000)
+if ENV_ID_PHYSICAL not in registry:
+    register(id=ENV_ID_PHYSICAL, entry_point="ledsim.envs.link_align:LinkAlignEnv",
+             max_episode_steps=1000, kwargs={"link": "luma"})
 
-__all__ = ["ENV_ID", "LinkAlignEnv", "EstimatorObservation", "ShippedAlignmentPolicy"]
+__all__ = ["ENV_ID", "ENV_ID_PHYSICAL", "LinkAlignEnv", "EstimatorObservation",
+           "ShippedAlignmentPolicy"]

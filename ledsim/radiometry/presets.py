@@ -110,6 +110,12 @@ LINK_PRESETS = {p.name: p for p in (
 )}
 
 
+#: The link ``ledsim run``, ``demo`` and the other commands use without ``--link``: a
+#: real modem at a realistic range (``--link paper`` is the paper's bench; the Python
+#: API's ``RunConfig`` keeps the bench).
+DEFAULT_LINK = "luma"
+
+
 def preset_named(name: str) -> LinkPreset:
     try:
         return LINK_PRESETS[name]
@@ -177,6 +183,6 @@ def kkl_reference_constants(base: LinkConstants | None = None) -> LinkConstants:
     return c.with_(measurement_noise_var=(KKL_REFERENCE_NOISE * peak_power(c)) ** 2)
 
 
-__all__ = ["KKL_REFERENCE_NOISE", "LINK_PRESETS", "WATER_TYPES", "LinkPreset",
+__all__ = ["DEFAULT_LINK", "KKL_REFERENCE_NOISE", "LINK_PRESETS", "WATER_TYPES", "LinkPreset",
            "PublishedFigure", "default_distance", "kkl_reference_constants", "link_constants",
            "preset_named", "water_of"]
