@@ -14,3 +14,13 @@ class LedsimError(ValueError):
 
 #: Former name, kept so older scripts keep working.
 UserError = LedsimError
+
+
+def named(registry: dict, name: str, kind: str):
+    """``registry[name]``, or a :class:`LedsimError` naming ``name`` and the allowed
+    ones (``kind``: what they are, e.g. ``"water"``)."""
+    try:
+        return registry[name]
+    except KeyError:
+        raise LedsimError(f"unknown {kind} {name!r}: choose one of "
+                          f"{', '.join(registry)}") from None

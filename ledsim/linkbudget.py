@@ -77,7 +77,11 @@ class LinkBudget(DictAccess):
 def link_budget(power: np.ndarray, noise_std: float, Te: float,
                 bit_rate: float = BIT_RATE) -> LinkBudget:
     """The link budget of a run from photodiode 1's noise-free power at each step [W]."""
-    s = snr(power, noise_std, Te, bit_rate)
+    return _budget(snr(power, noise_std, Te, bit_rate), bit_rate)
+
+
+def _budget(s: np.ndarray, bit_rate: float) -> LinkBudget:
+    """The budget of the steps' SNRs ``s`` [-] at ``bit_rate`` [bit/s]."""
     ber = ber_ook(s)
     ok = ber < FEC_LIMIT
     mean_snr = float(np.mean(s))
@@ -116,10 +120,4 @@ def link_budget_of(power: np.ndarray, noise: MeasurementNoise, Te: float,
     noise does not depend on the signal (the same numbers), shot noise otherwise."""
     if not noise.signal_dependent:
         return link_budget(power, noise.std, Te, bit_rate)
-    s = snr_at(power, noise, Te, bit_rate)
-    ber = ber_ook(s)
-    ok = ber < FEC_LIMIT
-    mean_snr = float(np.mean(s))
-    return LinkBudget(10.0 * math.log10(mean_snr) if mean_snr > 0 else None,
-                      float(np.mean(ber)), bit_rate * float(np.mean(ok)),
-                      float(np.mean(ok)))
+    return _budget(snr_at(power, noise, Te, bit_rate), bit_rate)

@@ -48,14 +48,22 @@ def test_a_run_budget_counts_the_steps_under_the_fec_limit():
     assert crossing == pytest.approx(0.53, abs=0.01)
 
 
-def test_ledsim_run_writes_the_link_budget(tmp_path):
+@pytest.mark.parametrize("link", ["paper", None])
+def test_ledsim_run_writes_the_link_budget(tmp_path, link):
+    """On the bench (1 kbit/s) and on the default physical link (its preset's rate)."""
+    from ledsim.radiometry.presets import DEFAULT_LINK, LINK_PRESETS
+
+    flags = [] if link is None else ["--link", link]
     r = run_cli("run", "--seeds", "2", "--seconds", "6", "--workers", "1", "--no-plot",
-                "-q", "--out", str(tmp_path / "o"))
+                "-q", *flags, "--out", str(tmp_path / "o"))
     assert r.returncode == 0, r.stderr
     res = json.loads((tmp_path / "o" / "results.json").read_text())
-    for key in ("snr_db", "ber", "throughput_bps", "fec_share"):
+    for key in ("snr_db", "ber", "throughput_bps", "fec_share", "received_power_w"):
         assert set(res[key]) == {"mean", "std", "n"} and res[key]["n"] == 2, key
-    assert res["bit_rate"] == BIT_RATE
+    rate = BIT_RATE if link == "paper" else LINK_PRESETS[DEFAULT_LINK].bit_rate
+    assert res["bit_rate"] == rate and res["link"] == (link or DEFAULT_LINK)
+    assert res["schema_version"] == 2
+    assert res["received_power_w"] == res["mean_power"]
     assert 0 < res["fec_share"]["mean"] <= 1
-    assert res["throughput_bps"]["mean"] == pytest.approx(BIT_RATE * res["fec_share"]["mean"])
+    assert res["throughput_bps"]["mean"] == pytest.approx(rate * res["fec_share"]["mean"])
     assert "FEC share" in r.stdout

@@ -13,7 +13,7 @@ import math
 from dataclasses import dataclass, field
 
 from ..config import PAPER_DISTANCE, LinkConstants
-from ..errors import LedsimError
+from ..errors import LedsimError, named
 from .hardware import DETECTORS, ReceiverOptics, Transmitter
 from .link import RadiometricLink
 from .water import WATER_TYPES, Water, water_named
@@ -117,11 +117,8 @@ DEFAULT_LINK = "luma"
 
 
 def preset_named(name: str) -> LinkPreset:
-    try:
-        return LINK_PRESETS[name]
-    except KeyError:
-        raise LedsimError(f"unknown link {name!r}: choose one of "
-                          f"{', '.join(LINK_PRESETS)}") from None
+    """The link preset ``name``; a one-line error naming the allowed ones otherwise."""
+    return named(LINK_PRESETS, name, "link")
 
 
 def default_distance(name: str) -> float:

@@ -30,7 +30,7 @@ from dataclasses import dataclass, replace
 
 import numpy as np
 
-from ..errors import LedsimError
+from ..errors import LedsimError, named
 
 #: Pure water's absorption [1/m] every 10 nm from 400 nm (Pope and Fry 1997, table 3).
 _PURE_WATER_NM = np.arange(400.0, 610.0, 10.0)
@@ -156,8 +156,4 @@ WATER_TYPES = {
 
 def water_named(name: str) -> Water:
     """The water type ``name``; a one-line error naming the allowed ones otherwise."""
-    try:
-        return WATER_TYPES[name]
-    except KeyError:
-        raise LedsimError(f"unknown water {name!r}: choose one of "
-                          f"{', '.join(WATER_TYPES)}") from None
+    return named(WATER_TYPES, name, "water")
