@@ -34,14 +34,16 @@ def shipped_checkpoint(distance: float, world: str = "closed-form",
         design: ``"default"``, or ``"paper"`` or ``"slow"`` (closed-form only), or
             ``"scheduled"`` (the gain-scheduled KKL), or ``"scheduled-lens"`` (MuJoCo
             only: the gain-scheduled KKL of the physical presets' receiver,
-            :func:`ledsim.radiometry.presets.kkl_reference_constants`).
+            :func:`ledsim.radiometry.presets.kkl_reference_constants`), or ``"lens"``
+            (MuJoCo only: the bank's fixed-gain members of that receiver).
         noise: measurement noise it was trained for, over the nominal [-] (MuJoCo
             observers of the bank that serves weak links).
     """
     prefix = {"closed-form": {"default": "kkl", "paper": "kkl_paper", "slow": "kkl_slow",
                               "scheduled": "kkl_scheduled"},
               "mujoco": {"default": "kkl_mujoco", "scheduled": "kkl_mujoco_scheduled",
-                         "scheduled-lens": "kkl_mujoco_scheduled_lens"}
+                         "scheduled-lens": "kkl_mujoco_scheduled_lens",
+                         "lens": "kkl_mujoco_lens"}
               }[world][design]
     suffix = "" if noise == 1.0 else f"_noise{noise:g}"
     return checkpoint_dir() / f"{prefix}_d{distance:g}{suffix}.pt"

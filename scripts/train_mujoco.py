@@ -3,6 +3,8 @@ into assets/checkpoints/kkl_mujoco_d<d>.pt.
 
     python scripts/train_mujoco.py [--distances 0.085] [--noise-scales 1] [--samples 200000]
 
+``--lens --bank`` trains their bank (kkl_mujoco_lens_d0.085_noise<s>.pt).
+
 ``--lens`` trains the gain-scheduled KKL of the physical presets (``--link aquaoptical``
 and the others): the bench with their receiver's response and relative noise
 (``ledsim.radiometry.presets.kkl_reference_constants``), saved as
@@ -40,6 +42,16 @@ def main() -> None:
     ap.add_argument("--lens", action="store_true",
                     help="train the physical presets' gain-scheduled KKL (overrides the above)")
     args = ap.parse_args()
+    if args.lens and args.bank:
+        for s in BANK_NOISE:
+            obs, rep, extra = train_mujoco_observer(
+                REFERENCE_DISTANCE, s, samples=args.samples, threads=args.threads,
+                constants=kkl_reference_constants())
+            path = save_checkpoint(obs, shipped_checkpoint(REFERENCE_DISTANCE, "mujoco",
+                                                           "lens", noise=s), extra=extra)
+            print(f"physical presets' bank, noise x{s:g}: training {rep.seconds:.0f} s, "
+                  f"L_dyn={rep.loss_dyn:.2e}, L_recon={rep.loss_recon:.2e} -> {path}")
+        return
     if args.lens:
         obs, rep, extra = train_mujoco_observer(
             REFERENCE_DISTANCE, 1.0, "scheduled", args.samples, threads=args.threads,

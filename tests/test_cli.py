@@ -262,7 +262,8 @@ def test_train_world_mujoco_makes_an_observer_that_run_loads(tmp_path):
     meta = json.loads(out.with_suffix(".json").read_text())
     assert meta["data"]["source"].startswith("MuJoCo") and meta["system"]["class"] == \
         "GimbalSystem"
-    r = run_cli("run", "--checkpoint", str(out), "--seeds", "1", "--seconds", "1",
+    r = run_cli("run", "--link", "paper", "--checkpoint", str(out), "--seeds", "1",
+                "--seconds", "1",
                 "--workers", "1", "--no-plot", "-q", "--out", str(tmp_path / "o"))
     assert r.returncode == 0, r.stderr
 
@@ -282,7 +283,8 @@ def test_outputs_follow_the_umask(tmp_path):
 
 
 def test_a_distance_the_shipped_kkl_does_not_serve_is_warned_about_and_flagged(tmp_path):
-    r = run_cli("run", "--distance", "0.33", "--seeds", "1", "--seconds", "1", "--workers",
+    r = run_cli("run", "--link", "paper", "--distance", "0.33", "--seeds", "1", "--seconds",
+                "1", "--workers",
                 "1", "--no-plot", "--out", str(tmp_path / "far"))
     assert r.returncode == 0, r.stderr
     assert "outside the 0.05-0.3 m" in r.stderr

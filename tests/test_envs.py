@@ -102,7 +102,8 @@ def test_the_shipped_policy_is_ledsim_runs_stack(tmp_path):
     from conftest import run_cli
 
     dist = "vibration:frequency=3,torque=0.3"
-    r = run_cli("run", "--scenario", "align", "--estimator", "kkl", "--disturbance", dist,
+    r = run_cli("run", "--link", "paper", "--scenario", "align", "--estimator", "kkl",
+                "--disturbance", dist,
                 "--seeds", "2", "--workers", "1", "--seconds", "6", "--no-plot", "-q",
                 "--save-trace", "--out", str(tmp_path / "o"))
     assert r.returncode == 0, r.stderr

@@ -131,6 +131,6 @@ def test_a_link_too_weak_for_the_fix_acquires_with_the_warm_up(tmp_path):
     assert far.scenario_spec.warmup == 1.0 and near.scenario_spec.warmup == 0.0
     assert RunConfig(distance=0.3, estimator="oracle").fast_acquisition  # needs no light
     assert not RunConfig(noise_scale=10.0).fast_acquisition
-    r = run_cli("run", "--distance", "0.3", "--seconds", "0.2", "--seeds", "1",
+    r = run_cli("run", "--link", "paper", "--distance", "0.3", "--seconds", "0.2", "--seeds", "1",
                 "--no-plot", "--out", str(tmp_path / "o"), "-q")
     assert r.returncode == 0 and "acquires with the warm-up" in r.stderr, r.stderr

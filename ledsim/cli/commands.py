@@ -130,14 +130,11 @@ def demo(args) -> int:
     rows, summaries = [], []
     with output_folder(out) as tmp:
         link = _link(args)
-        # On a physical link the KKL is the scheduled one; the bank is the bench's.
-        compared = [e for e in COMPARED_ESTIMATORS if link["link"] == "paper"
-                    or e != "kkl-bank"]
-        for est in compared:
+        for est in COMPARED_ESTIMATORS:
             cfg = RunConfig(scenario="align", estimator=est, seeds=args.seeds,
                             scene=args.scene, **_vehicle(args), **link)
             cfg.validate()
-            if est == compared[0]:
+            if est == COMPARED_ESTIMATORS[0]:
                 _check_vehicle(cfg)
             summary, trace = run_many(cfg, progress=not args.quiet)
             write_run(summary, trace, tmp / est)

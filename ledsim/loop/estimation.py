@@ -145,7 +145,9 @@ def kkl_members(cfg: RunConfig) -> list[KKLMember]:
     if not cfg.supervision:
         return [KKLMember(1.0, require_shipped_checkpoint(cfg.distance, "mujoco"),
                           cfg.world_config())]
-    return [KKLMember(s, require_shipped_checkpoint(REFERENCE_DISTANCE, "mujoco", noise=s),
+    design = "default" if cfg.link == "paper" else "lens"
+    return [KKLMember(s, require_shipped_checkpoint(REFERENCE_DISTANCE, "mujoco", design,
+                                                    noise=s),
                       noisier(ref, s)) for s in BANK_NOISE]
 
 

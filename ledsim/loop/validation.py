@@ -35,7 +35,7 @@ def keeping_gains(settings: tuple[str, ...]) -> StationKeeping:
     return settings_of(StationKeeping, settings, "--station-keeping-gain", LedsimError)
 
 
-#: The estimators whose shipped observers are the paper's bench's.
+#: The KKL estimators (on a physical link only under supervision).
 KKL_ON_BENCH = ("kkl", "kkl-scheduled", "kkl-bank")
 
 
@@ -56,14 +56,14 @@ def validate_run(cfg) -> None:
         raise LedsimError(f"unknown water {cfg.water!r}: choose one of "
                           f"{', '.join(WATER_TYPES)}")
     if cfg.link != "paper" and not cfg.checkpoint and (
-            cfg.estimator == "kkl-bank" or (cfg.estimator in KKL_ON_BENCH
-                                            and not cfg.supervision)):
+            cfg.estimator in KKL_ON_BENCH and not cfg.supervision):
         alone = "" if cfg.supervision else " with --no-supervision"
         raise LedsimError(f"estimator {cfg.estimator!r}{alone} has no shipped observer for "
                           f"--link "
-                          f"{cfg.link}: on a physical link the shipped KKL is the "
-                          "gain-scheduled one under supervision (--estimator kkl), or use "
-                          "ekf, ukf, pf or oracle")
+                          f"{cfg.link}: on a physical link the shipped KKLs (the "
+                          "gain-scheduled one and the bank) run under supervision, which "
+                          "maps the link onto the world they were trained in; or use ekf, "
+                          "ukf, pf or oracle")
     if cfg.link != "paper" and cfg.filter_distance == "nominal":
         raise LedsimError("--filter-distance nominal is not allowed with a physical --link: "
                           "it rescales the bench's noise (use configured)")
