@@ -187,14 +187,15 @@ def test_a_physical_link_runs_and_a_seed_does_not_depend_on_its_batch():
     assert alone.metrics.fec_share is not None
 
 
-def test_the_benchs_observers_refuse_a_physical_link():
-    """The bank and the unsupervised KKL are the bench's; the physical presets ship the
-    scheduled KKL, under supervision."""
-    for extra in (["--estimator", "kkl-bank"], ["--estimator", "kkl", "--no-supervision"]):
-        assert_user_error(run_cli("run", "--link", "luma", *extra, "--out", "/nonexistent/x"),
-                          "no shipped observer")
+def test_the_benchs_observers_refuse_a_physical_link(tmp_path):
+    """The unsupervised KKL is the bench's: a physical link's KKLs need the supervisor's
+    gain tracker."""
+    for extra in (["--estimator", "kkl", "--no-supervision"],
+                  ["--estimator", "kkl-scheduled", "--no-supervision"]):
+        assert_user_error(run_cli("run", "--link", "luma", *extra, "--out",
+                                  str(tmp_path / "x")), "no shipped observer")
     assert_user_error(run_cli("run", "--link", "luma", "--estimator", "ekf",
-                              "--filter-distance", "nominal", "--out", "/nonexistent/x"),
+                              "--filter-distance", "nominal", "--out", str(tmp_path / "y")),
                       "--filter-distance nominal")
 
 
