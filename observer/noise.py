@@ -29,19 +29,29 @@ class Digitiser:
     rounds to ``2^bits`` steps over +-that range and clips beyond it. Above the least
     sensitive range the receiver saturates at ``full_scale``. The gain control follows
     the clean signal (it averages over many samples), so the step is a function of it:
-    with 6 dB steps and 12 bits the quantisation is 2.8e-4 to 5.6e-4 of the signal.
+    with 6 dB steps and 12 bits the step is 2.8e-4 to 5.6e-4 of the signal (rms).
+
+    A sample is the mean of ``conversions`` conversions over the control period (an ADC
+    at ``conversions / Te``). Where the analog noise of one conversion (its bandwidth
+    ``conversions`` times the sample's) is at least half a step it dithers the
+    quantisation, and the mean's rounding error is a noise of variance
+    step^2 / (12 conversions); below that the rounding is not dithered, and the sample
+    is the one conversion rounded (an error fixed by the signal, which no averaging
+    removes).
 
     Attributes:
         bits: ADC resolution [bits].
         full_scale: the output that saturates the least sensitive range [output unit].
         decades: the span of the gain control [decades].
         step_ratio: the ratio of neighbouring ranges' full scales [-].
+        conversions: conversions averaged into one sample [-].
     """
 
     bits: int = 12
     full_scale: float = 1e-3
     decades: int = 6
     step_ratio: float = 2.0
+    conversions: int = 1
 
     def __post_init__(self) -> None:
         if not (isinstance(self.bits, int) and 1 <= self.bits <= 32):
@@ -54,6 +64,9 @@ class Digitiser:
         if not (1.0 < self.step_ratio <= 10.0):
             raise ValueError(f"step_ratio={self.step_ratio!r} is not allowed: must be in "
                              "(1, 10]")
+        if not (isinstance(self.conversions, int) and 1 <= self.conversions <= 10**7):
+            raise ValueError(f"conversions={self.conversions!r} is not allowed: must be an "
+                             "integer in 1..1e7")
 
     @property
     def n_ranges(self) -> int:
@@ -71,6 +84,13 @@ class Digitiser:
     def step(self, clean) -> np.ndarray:
         """Quantisation step at ``clean`` [output unit]: two full scales over 2^bits."""
         return 2.0 * self.range_of(clean) / 2**self.bits
+
+    def dithered(self, analog_std, clean) -> np.ndarray:
+        """Whether one conversion's analog noise (``analog_std`` [output unit] is the
+        sample's) reaches half a step at ``clean``, so that averaging resolves below
+        the step."""
+        return (np.asarray(analog_std, dtype=float) * math.sqrt(self.conversions)
+                >= 0.5 * self.step(clean)) & (self.conversions > 1)
 
     def apply(self, values, clean) -> np.ndarray:
         """``values`` rounded to the step and clipped to the range picked for ``clean``."""
@@ -134,17 +154,35 @@ class MeasurementNoise:
         ``(n_output,)`` (``clean``'s shape when given). Without ``clean``: the floor."""
         if clean is None or not self.signal_dependent:
             return np.full(self.n_output if clean is None else np.shape(clean), self.std)
-        var = self.analog_std(clean) ** 2
-        if self.digitiser is not None:
-            var = var + self.digitiser.step(clean) ** 2 / 12.0
-        return np.sqrt(var)
+        analog = self.analog_std(clean)
+        if self.digitiser is None:
+            return analog
+        return np.sqrt(analog**2 + self._quantisation_var(analog, clean))
+
+    def _quantisation_var(self, analog, clean) -> np.ndarray:
+        dig = self.digitiser
+        var = dig.step(clean) ** 2 / 12.0
+        return np.where(dig.dithered(analog, clean), var / dig.conversions, var)
 
     def measure(self, clean, rng: np.random.Generator) -> np.ndarray:
-        """A noisy reading of the clean outputs ``clean``: analog noise drawn at the
-        signal, then the ADC (one normal draw an output, as :meth:`sample`)."""
+        """A noisy reading of the clean outputs ``clean`` (one normal draw an output, as
+        :meth:`sample`): :meth:`measure_with` of fresh draws."""
         clean = np.asarray(clean, dtype=float)
-        y = clean + rng.standard_normal(clean.shape) * self.analog_std(clean)
-        return y if self.digitiser is None else self.digitiser.apply(y, clean)
+        return self.measure_with(rng.standard_normal(clean.shape), clean)
+
+    def measure_with(self, draws, clean) -> np.ndarray:
+        """The reading of ``clean`` from standard normal ``draws`` of its shape: analog
+        noise at the signal, then the ADC: a dithered mean of conversions (its
+        quantisation noise added to the draw's), or one undithered conversion rounded."""
+        clean = np.asarray(clean, dtype=float)
+        analog = self.analog_std(clean)
+        if self.digitiser is None:
+            return clean + draws * analog
+        dither = self.digitiser.dithered(analog, clean)
+        var = np.where(dither, analog**2 + self._quantisation_var(analog, clean), analog**2)
+        y = clean + draws * np.sqrt(var)
+        top = self.digitiser.range_of(clean)
+        return np.where(dither, np.clip(y, -top, top), self.digitiser.apply(y, clean))
 
     def at_bandwidth(self, ratio: float) -> MeasurementNoise:
         """The noise of a channel whose bandwidth is ``ratio`` times this one's [-]: white

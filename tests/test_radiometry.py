@@ -97,6 +97,18 @@ def test_noise_terms_and_digitiser():
     clean = np.full((40_000, 2), 2e-7)
     draws = noisy.measure(clean, np.random.default_rng(0)) - clean
     assert np.std(draws) == pytest.approx(noisy.std_at(clean[0])[0], rel=0.03)
+    # averaged conversions: dithered by the analog noise, unbiased, and the quantisation
+    # shrinks with their number; too little noise to dither: the rounding stays
+    averaged = MeasurementNoise(2e-10, 2, 1.0, 0.0, Digitiser(12, 1e-3, 6, conversions=10_000))
+    clean = np.full((40_000, 2), 2.1e-7)
+    step = averaged.digitiser.step(2.1e-7)
+    assert averaged.digitiser.dithered(averaged.analog_std(2.1e-7), 2.1e-7)
+    draws = averaged.measure(clean, np.random.default_rng(1)) - clean
+    assert abs(np.mean(draws)) < 3 * 2e-10 / math.sqrt(draws.size)
+    assert np.std(draws) == pytest.approx(math.sqrt(4e-20 + step**2 / 12 / 10_000), rel=0.03)
+    quiet = MeasurementNoise(1e-15, 2, 1.0, 0.0, Digitiser(12, 1e-3, 6, conversions=10_000))
+    assert not quiet.digitiser.dithered(quiet.analog_std(2.1e-7), 2.1e-7)
+    assert quiet.std_at(np.array([2.1e-7]))[0] == pytest.approx(step / math.sqrt(12), rel=1e-3)
     # the paper's noise ignores the signal and draws as before
     paper = LinkConstants().measurement_noise()
     assert paper.std_at(np.array([5.0, 0.1])) == pytest.approx([paper.std] * 2)
@@ -204,8 +216,14 @@ def test_the_gain_trackers_deadband_follows_the_link():
 
     assert tracker_deadband(LinkConstants()) == BENCH_DEADBAND
     assert tracker_deadband(LinkConstants(distance=0.05)) == BENCH_DEADBAND
-    near, far = (tracker_deadband(link_constants("luma", d)) for d in (10.0, 60.0))
-    assert 1e-4 < near < far < BENCH_DEADBAND  # a weaker signal, a noisier gain
+    from ledsim.optics import nominal_noise_std, peak_power
+
+    bench = LinkConstants().measurement_noise_std / peak_power(LinkConstants())
+    for d in (6.0, 10.0, 30.0, 60.0):  # in proportion to the samples' relative noise
+        c = link_constants("luma", d)
+        relative = nominal_noise_std(c) / peak_power(c)
+        assert tracker_deadband(c) == pytest.approx(BENCH_DEADBAND * relative / bench)
+        assert 1e-6 < tracker_deadband(c) < BENCH_DEADBAND / 10
 
 
 def test_the_physical_kkl_runs_on_every_preset():

@@ -130,14 +130,13 @@ def noisier(world: WorldConfig, scale: float) -> WorldConfig:
 def kkl_members(cfg: RunConfig) -> list[KKLMember]:
     """The KKL observers of a run. ``kkl``: ``cfg.checkpoint``, the shipped observer of
     the distance (without supervision) or the shipped gain-scheduled KKL of the
-    reference distance (with it); on a physical link the bank, which measured best
-    there (``docs/link_table.md``); ``kkl-scheduled``: the scheduled one always (or
-    ``cfg.checkpoint``, trained there); ``kkl-bank``: the shipped bank (with
-    supervision). The gain tracker serves every distance from the reference one."""
+    reference distance (with it; on a physical link the physical receiver's);
+    ``kkl-scheduled``: that one always (or ``cfg.checkpoint``, trained there);
+    ``kkl-bank``: the shipped bank (with supervision). The gain tracker serves every
+    distance from the reference one."""
     ref = reference_world(cfg)
-    physical_kkl = cfg.link != "paper" and cfg.estimator == "kkl" and not cfg.checkpoint
     if cfg.estimator == "kkl-scheduled" or (cfg.estimator == "kkl" and cfg.supervision
-                                            and not cfg.checkpoint and not physical_kkl):
+                                            and not cfg.checkpoint):
         path = Path(cfg.checkpoint) if cfg.checkpoint else require_shipped_checkpoint(
             REFERENCE_DISTANCE, "mujoco",
             design="scheduled" if cfg.link == "paper" else "scheduled-lens")

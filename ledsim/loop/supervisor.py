@@ -12,7 +12,6 @@ the gain; then the control law has the motor again.
 
 from __future__ import annotations
 
-import math
 from collections import deque
 
 import numpy as np
@@ -63,16 +62,16 @@ BENCH_DEADBAND = 0.005
 
 def tracker_deadband(constants: LinkConstants) -> float:
     """The gain tracker's deadband for a run of ``constants`` [-]: the bench's, or on a
-    physical link the bench's times the root of the pointing samples' relative noise
-    over the bench's (0.05-0.2 %: their gain is that much better determined). At
-    luma's 30 m (0.06 % noise) the KKL's steady phi RMSE was 3.2e-3 rad with the
-    bench's 0.5 %, 7.6e-4 with 0.05 % and 1.5e-3 with 0.005 % (chasing the noise)."""
+    physical link the bench's scaled by the pointing samples' relative noise over the
+    bench's (0.0007-0.02 % at luma's 6-60 m: the gain is that much better
+    determined).
+    ``docs/link_floor.md`` measures the bench's band, a tenth and a hundredth of it."""
     if constants.link is None:
         return BENCH_DEADBAND
     bench = LinkConstants()
     relative = nominal_noise_std(constants) / peak_power(constants)
-    return BENCH_DEADBAND * min(1.0, math.sqrt(
-        relative / (bench.measurement_noise_std / peak_power(bench))))
+    return BENCH_DEADBAND * min(1.0, relative / (bench.measurement_noise_std
+                                                 / peak_power(bench)))
 
 
 class LinkSupervisor:

@@ -127,10 +127,7 @@ class BatchSensor:
         b = self.batch
         clean, phi, theta, dist, vis, rays = self.clean()
         if self.signal_noise:
-            noise = self.sensors[0].measurement_noise
-            power = clean + self.noise[self.k] * noise.analog_std(clean)
-            if noise.digitiser is not None:
-                power = noise.digitiser.apply(power, clean)
+            power = self.sensors[0].measurement_noise.measure_with(self.noise[self.k], clean)
         else:
             power = clean + self.noise[self.k]
         self.k += 1

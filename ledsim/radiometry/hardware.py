@@ -159,12 +159,16 @@ _S3590 = ("Hamamatsu S3590-08 class Si PIN datasheet (10 x 10 mm, about 0.3 A/W 
 _H10721 = ("Hamamatsu H10721-210 class PMT module datasheet (8 mm photocathode, about "
            "0.1 A/W cathode sensitivity at 450 nm, gain 2e6, F about 1.3)")
 
+#: Conversions averaged into one pointing sample: an ADC at 1 MS/s over the 10 ms
+#: control period (the modem's receiver digitises the data at that rate).
+CONVERSIONS = 10_000
+
 #: Representative detectors (the makers of the modems do not publish their parts).
 DETECTORS = {
     "si-apd": Detector("apd", math.pi * 0.005**2, 0.24, 50.0, 50.0**0.2, 1e-10, 2e-12,
-                       Digitiser(12, 1e-4, 8), _S8664),
-    "si-pin": Detector("pin", 1e-4, 0.3, 1.0, 1.0, 2e-9, 2e-12, Digitiser(12, 1e-2, 8),
-                       _S3590),
+                       Digitiser(12, 1e-4, 8, conversions=CONVERSIONS), _S8664),
+    "si-pin": Detector("pin", 1e-4, 0.3, 1.0, 1.0, 2e-9, 2e-12,
+                       Digitiser(12, 1e-2, 8, conversions=CONVERSIONS), _S3590),
     "pmt": Detector("pmt", math.pi * 0.004**2, 0.1, 2e6, 1.3, 5e-15, 10e-12,
-                    Digitiser(12, 1e-6, 8), _H10721),
+                    Digitiser(12, 1e-6, 8, conversions=CONVERSIONS), _H10721),
 }

@@ -157,12 +157,13 @@ def link_constants(name: str = "paper", distance: float | None = None,
     return preset.link(water_of(preset, water, attenuation)).constants(d, base)
 
 
-#: The relative noise [-] of the physical KKL's reference world: a 12-bit ADC whose
-#: range just holds twice the signal, sigma = 2 x full scale / 2^12 / sqrt(12) over the
-#: signal, 2.8e-4, and the analog noise beside it. The gain control keeps a link's
-#: pointing samples between this and ten times it; the scheduled KKL is learned for 1-16
-#: times it (``observer.scheduled.ScheduledDesign.noise_range``).
-KKL_REFERENCE_NOISE = 3e-4
+#: The relative noise [-] of the physical KKLs' reference world: the pointing samples'
+#: noise over the signal on a physical link near half its range at the FEC limit (the
+#: analog noise, which dithers the ADC's averaged conversions: 4e-5 to 1e-4 at luma's
+#: half range in the three waters, 1e-3 near the range). The bank's members are learned
+#: for 1-13 times it and the scheduled KKL for 1-16 times it
+#: (``observer.scheduled.ScheduledDesign.noise_range``).
+KKL_REFERENCE_NOISE = 5e-5
 
 
 def kkl_reference_constants(base: LinkConstants | None = None) -> LinkConstants:
