@@ -13,6 +13,8 @@ control period (1 / (2 Te)), the data at the bit rate (:meth:`MeasurementNoise.a
 
 from __future__ import annotations
 
+import bisect
+import functools
 import math
 from dataclasses import dataclass, replace
 
@@ -74,12 +76,24 @@ class Digitiser:
         return int(math.ceil(self.decades * math.log(10.0) / math.log(self.step_ratio)
                              - 1e-9)) + 1
 
+    @functools.cached_property
+    def tops(self) -> tuple[float, ...]:
+        """The ranges' full scales, most sensitive first [output unit]."""
+        return tuple(self.full_scale * self.step_ratio ** -j
+                     for j in range(self.n_ranges - 1, -1, -1))
+
     def range_of(self, clean) -> np.ndarray:
-        """Full scale of the range the gain control picks for ``clean`` [output unit]."""
-        level = np.maximum(2.0 * np.abs(np.asarray(clean, dtype=float)), 1e-300)
-        j = np.clip(np.floor(np.log(self.full_scale / level) / math.log(self.step_ratio)),
-                    0, self.n_ranges - 1)
-        return self.full_scale * self.step_ratio ** -j
+        """Full scale of the range the gain control picks for ``clean`` [output unit]:
+        the most sensitive that holds twice it (comparisons only, so a value and an
+        array of it pick alike)."""
+        level = 2.0 * np.abs(np.asarray(clean, dtype=float))
+        tops = np.asarray(self.tops)
+        return tops[np.minimum(np.searchsorted(tops, level), tops.size - 1)]
+
+    def range_at(self, clean: float) -> float:
+        """:meth:`range_of` for one value, in plain floats (the per-step path)."""
+        tops = self.tops
+        return tops[min(bisect.bisect_left(tops, 2.0 * abs(clean)), len(tops) - 1)]
 
     def step(self, clean) -> np.ndarray:
         """Quantisation step at ``clean`` [output unit]: two full scales over 2^bits."""
@@ -154,6 +168,8 @@ class MeasurementNoise:
         ``(n_output,)`` (``clean``'s shape when given). Without ``clean``: the floor."""
         if clean is None or not self.signal_dependent:
             return np.full(self.n_output if clean is None else np.shape(clean), self.std)
+        if np.ndim(clean) == 1 and self.digitiser is not None:  # one output vector
+            return np.array([self._std_one(c) for c in np.asarray(clean, float).tolist()])
         analog = self.analog_std(clean)
         if self.digitiser is None:
             return analog
@@ -175,6 +191,10 @@ class MeasurementNoise:
         noise at the signal, then the ADC: a dithered mean of conversions (its
         quantisation noise added to the draw's), or one undithered conversion rounded."""
         clean = np.asarray(clean, dtype=float)
+        if clean.ndim == 1 and self.digitiser is not None:  # one reading: plain floats
+            return np.array([self._measure_one(float(z), float(c))
+                             for z, c in zip(np.asarray(draws).tolist(), clean.tolist(),
+                                             strict=True)])
         analog = self.analog_std(clean)
         if self.digitiser is None:
             return clean + draws * analog
@@ -183,6 +203,31 @@ class MeasurementNoise:
         y = clean + draws * np.sqrt(var)
         top = self.digitiser.range_of(clean)
         return np.where(dither, np.clip(y, -top, top), self.digitiser.apply(y, clean))
+
+    def _std_one(self, c: float) -> float:
+        """:meth:`std_at` of one output in plain floats (the per-step path)."""
+        dig = self.digitiser
+        analog = self.scale * math.sqrt(self.nominal_std**2 + self.shot_coefficient
+                                        * max(c, 0.0))
+        step = 2.0 * dig.range_at(c) / 2**dig.bits
+        var = step**2 / 12.0
+        if dig.conversions > 1 and analog * math.sqrt(dig.conversions) >= 0.5 * step:
+            var = var / dig.conversions
+        return math.sqrt(analog**2 + var)
+
+    def _measure_one(self, z: float, c: float) -> float:
+        """:meth:`measure_with` of one output, the same operations in plain floats (the
+        per-step path, several times faster at this size; a batch's row is equal)."""
+        dig = self.digitiser
+        analog = self.scale * math.sqrt(self.nominal_std**2 + self.shot_coefficient
+                                        * max(c, 0.0))
+        top = dig.range_at(c)
+        step = 2.0 * top / 2**dig.bits
+        if dig.conversions > 1 and analog * math.sqrt(dig.conversions) >= 0.5 * step:
+            y = c + z * math.sqrt(analog**2 + step**2 / 12.0 / dig.conversions)
+            return min(max(y, -top), top)
+        y = c + z * math.sqrt(analog**2)
+        return min(max(round(y / step) * step, -top), top)
 
     def at_bandwidth(self, ratio: float) -> MeasurementNoise:
         """The noise of a channel whose bandwidth is ``ratio`` times this one's [-]: white
