@@ -123,12 +123,15 @@ def budget_report(name: str, water: str | None = None, attenuation: float | None
     w = water_of(preset, water, attenuation)
     if preset.physical:
         w = w.at_wavelength(preset.transmitter.wavelength)
+    water_name, beam = w.name, w.attenuation
+    if not preset.physical and water is None and attenuation is None:
+        water_name, beam = "the bench's", c.attenuation  # the paper's own b, 0.15/m
     reach = range_at_fec(c, bit_rate)
     if distances is None:
         distances = np.geomspace(0.1 * reach, 2.0 * reach, 12)
     rows = [budget_at(c.with_(distance=float(d)), float(d), bit_rate, pointing_error)
             for d in distances]
-    return BudgetReport(name, w.name, c.attenuation, w.attenuation, bit_rate, FEC_LIMIT,
+    return BudgetReport(preset.name, water_name, c.attenuation, beam, bit_rate, FEC_LIMIT,
                         pointing_error, reach, rows)
 
 
