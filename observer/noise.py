@@ -7,7 +7,7 @@ standard deviation on every output, independent between outputs and steps. A phy
 receiver adds terms that depend on the clean output (:meth:`MeasurementNoise.std_at`):
 the signal's shot noise, a variance proportional to the signal, and the quantisation
 of an ADC behind an automatic gain control (:class:`Digitiser`), whose step follows the
-signal's decade. Each channel has its noise bandwidth: the pointing samples once a
+signal's range. Each channel has its noise bandwidth: the pointing samples once a
 control period (1 / (2 Te)), the data at the bit rate (:meth:`MeasurementNoise.at_bandwidth`).
 """
 
@@ -204,27 +204,31 @@ class MeasurementNoise:
         top = self.digitiser.range_of(clean)
         return np.where(dither, np.clip(y, -top, top), self.digitiser.apply(y, clean))
 
-    def _std_one(self, c: float) -> float:
-        """:meth:`std_at` of one output in plain floats (the per-step path)."""
-        dig = self.digitiser
-        analog = self.scale * math.sqrt(self.nominal_std**2 + self.shot_coefficient
-                                        * max(c, 0.0))
-        step = 2.0 * dig.range_at(c) / 2**dig.bits
-        var = step**2 / 12.0
-        if dig.conversions > 1 and analog * math.sqrt(dig.conversions) >= 0.5 * step:
-            var = var / dig.conversions
-        return math.sqrt(analog**2 + var)
-
-    def _measure_one(self, z: float, c: float) -> float:
-        """:meth:`measure_with` of one output, the same operations in plain floats (the
-        per-step path, several times faster at this size; a batch's row is equal)."""
+    def _terms_one(self, c: float) -> tuple[float, float, float, bool]:
+        """(analog std, range, step, dithered) of one clean output ``c``, in plain
+        floats: the same operations as :meth:`analog_std` and :class:`Digitiser`'s."""
         dig = self.digitiser
         analog = self.scale * math.sqrt(self.nominal_std**2 + self.shot_coefficient
                                         * max(c, 0.0))
         top = dig.range_at(c)
         step = 2.0 * top / 2**dig.bits
-        if dig.conversions > 1 and analog * math.sqrt(dig.conversions) >= 0.5 * step:
-            y = c + z * math.sqrt(analog**2 + step**2 / 12.0 / dig.conversions)
+        dither = dig.conversions > 1 and analog * math.sqrt(dig.conversions) >= 0.5 * step
+        return analog, top, step, dither
+
+    def _std_one(self, c: float) -> float:
+        """:meth:`std_at` of one output in plain floats (the per-step path)."""
+        analog, _, step, dither = self._terms_one(c)
+        var = step**2 / 12.0
+        if dither:
+            var = var / self.digitiser.conversions
+        return math.sqrt(analog**2 + var)
+
+    def _measure_one(self, z: float, c: float) -> float:
+        """:meth:`measure_with` of one output, the same operations in plain floats (the
+        per-step path, several times faster at this size; a batch's row is equal)."""
+        analog, top, step, dither = self._terms_one(c)
+        if dither:
+            y = c + z * math.sqrt(analog**2 + step**2 / 12.0 / self.digitiser.conversions)
             return min(max(y, -top), top)
         y = c + z * math.sqrt(analog**2)
         return min(max(round(y / step) * step, -top), top)

@@ -12,7 +12,7 @@ from observer.noise import MeasurementNoise
 
 from ..config import LinkConstants
 from ..control import intensity_maximum
-from ..linkbudget import BIT_RATE, link_budget, link_budget_of
+from ..linkbudget import BIT_RATE, link_budget_of
 from ..optics import peak_power
 from ..results import DictAccess
 
@@ -185,10 +185,9 @@ def run_metrics(x: np.ndarray, xhat: np.ndarray, power_clean: np.ndarray, steady
         # occluder's edge dims the beam before its nominal start).
         after = [a for a, b in events if b is None or b > event_start + 1e-9]
         delay = max(after[0] - event_start, 0.0) if after else None
-    if noise is not None:
-        budget = asdict(link_budget_of(p1, noise, Te, bit_rate))
-    else:
-        budget = {} if noise_std is None else asdict(link_budget(p1, noise_std, Te, bit_rate))
+    if noise is None and noise_std is not None:
+        noise = MeasurementNoise(noise_std)
+    budget = {} if noise is None else asdict(link_budget_of(p1, noise, Te, bit_rate))
     flagged = np.zeros(len(x), bool) if lost is None else np.asarray(lost, dtype=bool)
     wrong = (np.abs(lay.angle(xhat) - lay.angle(x)) > SILENT_ERROR) & ~flagged
     after = np.arange(len(x)) * Te >= warmup

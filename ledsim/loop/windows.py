@@ -13,7 +13,7 @@ import numpy as np
 
 from observer.noise import MeasurementNoise
 
-from ..linkbudget import BIT_RATE, link_budget, link_budget_of
+from ..linkbudget import BIT_RATE, link_budget_of
 from ..results import DictAccess
 from .metrics import availability_mask
 
@@ -64,6 +64,7 @@ def window_metrics(p1: np.ndarray, power_max: np.ndarray, noise_std: float, Te: 
     object (its link budget; None: ``noise_std``'s) at ``bit_rate`` [bit/s]."""
     if not window > 0:
         raise ValueError(f"window={window!r} is not allowed: must be > 0 s")
+    noise = MeasurementNoise(noise_std) if noise is None else noise
     n = len(p1)
     size = max(1, int(round(window / Te)))
     available, _ = availability_mask(p1, power_max, noise_std)
@@ -75,8 +76,7 @@ def window_metrics(p1: np.ndarray, power_max: np.ndarray, noise_std: float, Te: 
             break
         if b < n and n - b < size // 2:
             b = n
-        budget = (link_budget(p1[a:b], noise_std, Te, bit_rate) if noise is None
-                  else link_budget_of(p1[a:b], noise, Te, bit_rate))
+        budget = link_budget_of(p1[a:b], noise, Te, bit_rate)
         out.append(WindowMetrics(
             a * Te, b * Te, float(np.mean(available[a:b])), budget.fec_share,
             float(np.mean(p1[a:b])),
