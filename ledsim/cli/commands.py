@@ -31,8 +31,7 @@ def _loop_config(args, **given):
     from ..loop.config import PARTS, RunConfig
 
     values = {**vars(args), "disturbances": tuple(args.disturbance),
-              "supervision": not args.no_supervision, **_vehicle(args),
-              "distance": resolved_distance(args), **given}
+              "supervision": not args.no_supervision, **_vehicle(args), **given}
     parts = {name: kind(**{f.name: values[f.name] for f in fields(kind) if f.name in values})
              for name, kind in PARTS.items()}
     cfg = RunConfig.of(**parts)
@@ -42,12 +41,9 @@ def _loop_config(args, **given):
 
 def _link(args, distance: bool = True) -> dict:
     """The run's link flags (``--link``, ``--water``, ``--attenuation``, ``--bit-rate``
-    and, with ``distance``, the preset's distance unless ``--distance`` is given)."""
-    link = {k: getattr(args, k, None) for k in ("water", "attenuation", "bit_rate")}
-    link["link"] = getattr(args, "link", "paper")
-    if distance:
-        link["distance"] = resolved_distance(args)
-    return link
+    and, with ``distance``, ``--distance``: None lets the run take the preset's)."""
+    keys = ("link", "water", "attenuation", "bit_rate") + (("distance",) if distance else ())
+    return {k: getattr(args, k) for k in keys}
 
 
 def simulate(args) -> int:
@@ -235,7 +231,7 @@ def train(args) -> int:
 def sweep(args) -> int:
     from ..loop.config import RunConfig
     from ..loop.sweep import SweepGrid, run_sweep
-    from ..radiometry.presets import preset_named
+    from ..radiometry.presets import default_distance
 
     if args.address is not None and args.backend != "ray":
         raise LedsimError("--address needs --backend ray")
@@ -248,7 +244,7 @@ def sweep(args) -> int:
     _check_vehicle(base)
     grid = SweepGrid(estimators=args.estimator or ["kkl"],
                      disturbances=args.disturbance or ["none"],
-                     distances=args.distance or [preset_named(args.link).distance],
+                     distances=args.distance or [default_distance(args.link)],
                      noise_scales=args.noise_scale or [1.0], seeds=args.seeds, base=base)
     out = check_out_dir(args.out)
     t0 = time.perf_counter()

@@ -44,10 +44,10 @@ def add_link_args(p) -> None:
 
 def resolved_distance(args) -> float:
     """``--distance``, or the ``--link`` preset's default distance [m]."""
-    from ..radiometry.presets import DEFAULT_LINK, preset_named
+    from ..radiometry.presets import DEFAULT_LINK, default_distance
 
     d = getattr(args, "distance", None)
-    return preset_named(getattr(args, "link", DEFAULT_LINK)).distance if d is None else d
+    return default_distance(getattr(args, "link", DEFAULT_LINK)) if d is None else d
 
 
 def add_scene_args(p) -> None:
