@@ -29,6 +29,15 @@ def test_wheel_holds_the_scene_and_every_checkpoint(wheel):
     assert {f"ledsim/assets/checkpoints/{n}" for n in shipped} <= names
 
 
+def test_wheel_holds_every_package(wheel):
+    """Every package of the source tree is in the wheel (an installed wheel beside an
+    editable install can borrow a missing one from the source and hide it)."""
+    names = set(zipfile.ZipFile(wheel).namelist())
+    packages = {str(p.relative_to(ROOT)) for pkg in ("ledsim", "observer")
+                for p in (ROOT / pkg).rglob("__init__.py")}
+    assert packages <= names, sorted(packages - names)
+
+
 def test_installed_wheel_runs_from_another_folder(wheel, tmp_path):
     target = tmp_path / "site"
     r = subprocess.run([sys.executable, "-m", "pip", "install", "-q", "--no-deps",
