@@ -129,6 +129,21 @@ class GaussianFilter(Estimator):
         self.P = (self.P0 if covariance is None else np.asarray(covariance, dtype=float)).copy()
         self.inconsistent = 0  # steps in a row with an implausible innovation
 
+    #: How far outside its domain (in half-widths from the centre) the mean may go
+    #: before the filter starts again: only a run-away, never a real excursion.
+    CONTAINED_WIDTHS = 100.0
+
+    def contain(self) -> None:
+        """Start again from the domain's centre when the mean ran away: a prediction
+        without updates (a gated sample, a lost link) through a nonlinear f can square
+        a bad estimate step after step (1e2, 1e4, 1e8, ...) until it overflows."""
+        s = self.system
+        centre = 0.5 * (s.domain_low + s.domain_high)
+        half = 0.5 * (s.domain_high - s.domain_low)
+        if not (np.all(np.isfinite(self.x)) and np.all(np.isfinite(self.P))
+                and np.all(np.abs(self.x - centre) <= self.CONTAINED_WIDTHS * half)):
+            self.reset()
+
     def diverged(self, innov: np.ndarray, S: np.ndarray) -> bool:
         """Count an implausible innovation; True (and a fresh start) once too many
         came in a row."""

@@ -167,6 +167,7 @@ class ScheduledKKL(Estimator):
     def reset(self, x0=None, covariance=None) -> None:
         """Start again, fast: the schedule's clock restarts (no covariance to set)."""
         self.k, self._inside, self.locked, self._off = 0, 0.0, 0.0, 1.0
+        self._drive = 0.0  # mean |u - u_bar| (GainSchedule.driven)
         self._wide = False
         self._gain(self.clip(self.schedule.gain(0.0, self.noise)))
         self._xhat, self._y = None, None
@@ -194,11 +195,19 @@ class ScheduledKKL(Estimator):
             z = z + self._enc(driven, self.w) - self._enc(f(xh, self.u_bar), self.w)
         self.z = z
         self.k += 1
+        sch = self.schedule
         if self._wide:  # no slowing down while the estimate is outside the locked box
-            sch = self.schedule
             t_wide = sch.time_of(sch.recover_gain(self.noise), self.noise)
             self.k = min(self.k, int(round(t_wide / self.system.Te)))
-        w = self.clip(self.schedule.gain(self.k * self.system.Te, self.noise))
+        driven = 0.0
+        if sch.driven is not None:  # nor while the motor works against a load
+            Te = self.system.Te
+            self._drive += min(Te / sch.driven_time, 1.0) * (
+                float(np.max(np.abs(np.asarray(u, dtype=float) - self.u_bar))) - self._drive)
+            if self._drive > sch.driven:
+                driven = self.clip(sch.driven_gain * sch.recover_gain(self.noise))
+                self.k = min(self.k, int(round(sch.time_of(driven, self.noise) / Te)))
+        w = max(self.clip(self.schedule.gain(self.k * self.system.Te, self.noise)), driven)
         if max(w / self.w, self.w / w) >= self.schedule.step_ratio or \
                 (w != self.w and w == self.clip(self.schedule.floor(self.noise))):
             self.set_gain(w)

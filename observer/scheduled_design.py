@@ -122,6 +122,13 @@ class GainSchedule:
         jump: a distance of this many locked boxes acts at once (a kick) [-].
         disagree: the locked decoder is dropped when its estimate is this far from the
             wide one's, in domain half-widths (either component) [-].
+        driven: while the input's mean magnitude |u - u_bar| (over ``driven_time``)
+            exceeds this, the plant is being driven (the motor working against a load,
+            as in a sea's waves or a current) and the gain is held at least at
+            ``driven_gain`` times ``recover``'s, the clock held to match [u's units]
+            (None: never; the paper's schedule).
+        driven_time: the averaging time of that mean [s].
+        driven_gain: the least gain while driven, in ``recover``'s [-].
     """
 
     start: float = 2.0
@@ -137,6 +144,9 @@ class GainSchedule:
     settle_off: float = 0.1
     jump: float = 3.0
     disagree: float = 0.1
+    driven: float | None = None
+    driven_time: float = 0.5
+    driven_gain: float = 1.0
 
     def __post_init__(self):
         positive = (self.start, self.settle, self.quiet, self.recover, self.lock_ramp,

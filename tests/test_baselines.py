@@ -39,3 +39,21 @@ def test_convergence_flag_separates_locked_from_tracking_estimates():
     wrong_branch = truth * [-1, 1] + [0.05, 0]  # mirror image across the peak
     assert converged(good, truth, 50)
     assert not converged(wrong_branch, truth, 50)
+
+
+def test_a_filter_whose_mean_runs_away_starts_again(system):
+    """Predictions without updates through a nonlinear f can square a bad mean step
+    after step; the filters start again from the domain's centre instead of overflowing."""
+    from observer.baselines.ekf import ExtendedKalmanFilter
+    from observer.baselines.ukf import UnscentedKalmanFilter
+
+    for cls in (ExtendedKalmanFilter, UnscentedKalmanFilter):
+        f = cls(system)
+        centre = 0.5 * (system.domain_low + system.domain_high)
+        f.x = centre + 1e3 * (system.domain_high - system.domain_low)
+        f.predict(0.0)
+        assert np.all(np.isfinite(f.x))
+        np.testing.assert_allclose(f.x, f.initial_guess(None))
+        f.x = centre + 0.5 * (system.domain_high - centre)  # an ordinary excursion stays
+        f.predict(0.0)
+        assert np.all(np.abs(f.x - centre) < system.domain_high - centre)

@@ -23,6 +23,11 @@ from ledsim.physics.disturbances import DisturbanceError, parse_disturbance
     (["run", "--workers", "0"], "--workers"),
     (["run", "--disturbance", "occlusion:start=11"], "after the end"),
     (["render", "--fps", "inf"], "--fps"),
+    (["run", "--depth", "0.5"], "--depth"),
+    (["run", "--depth", "nan"], "--depth"),
+    (["sweep", "--transmitter-depth", "0"], "--transmitter-depth"),
+    (["run", "--transmitter-depth", "100"], "--transmitter-depth"),
+    (["run", "--link", "paper", "--disturbance", "flicker"], "physical link"),
     (["evaluate", "--scenario", "if1", "--distance", "inf"], "--distance"),
 ])
 def test_hostile_numbers_are_refused_before_any_work(tmp_path, args, needle):
@@ -42,7 +47,7 @@ def test_train_checks_its_output_before_training(tmp_path):
 
 @pytest.mark.parametrize("spec", ["vibration:frequency=0", "vibration:frequency=51",
                                   "current:gust=-1", "current:hold=0.5", "current:seed=-1",
-                                  "transmitter:sway=1", "occlusion:duration=0",
+                                  "transmitter:sway=10", "occlusion:duration=0",
                                   "occlusion:start=-1", "vibration:torque=nan"])
 def test_disturbance_keys_have_physical_ranges(spec):
     with pytest.raises(DisturbanceError, match=spec.split(":")[1].split("=")[0]):

@@ -182,3 +182,30 @@ def test_the_shipped_checkpoint_is_what_train_design_scheduled_makes():
     meta = ckpt.metadata(shipped_checkpoint(0.085, "mujoco", design="scheduled"))
     assert asdict(GainSchedule(**meta["schedule"])) == asdict(GainSchedule())
     assert ScheduledDesign.from_dict(meta["scheduled_design"]) == ScheduledDesign()
+
+
+def test_while_the_motor_works_against_a_load_it_does_not_slow_down(scheduled, system):
+    """GainSchedule.driven: a plant driven hard (mean |u| above the level) keeps the
+    filters at driven_gain x recover; once quiet, the schedule settles as before. Off
+    (None, the paper's schedule) a driven plant slows down like a quiet one."""
+    obs, _ = scheduled
+    shipped = obs.schedule
+    obs.set_noise(1.0)
+
+    def settle(u, steps=400):
+        obs.reset([0.01, 0.0])
+        x = np.array([0.01, 0.0])
+        for _ in range(steps):
+            obs.update(system.h(x))
+            obs.predict(u)
+        return obs.w
+
+    try:
+        obs.schedule = replace(shipped, disagree=1.0, driven=0.3, driven_gain=2.0)
+        target = obs.clip(2.0 * obs.schedule.recover_gain(1.0))
+        assert settle(0.5) == pytest.approx(target, rel=0.06)
+        assert settle(0.0) == pytest.approx(obs.schedule.floor(1.0), rel=0.06)
+        obs.schedule = replace(shipped, disagree=1.0)
+        assert settle(0.5) < 0.7 * target
+    finally:
+        obs.schedule = shipped

@@ -42,8 +42,10 @@ def _loop_config(args, **given):
 def _link(args, distance: bool = True) -> dict:
     """The run's link flags (``--link``, ``--water``, ``--attenuation``, ``--bit-rate``
     and, with ``distance``, ``--distance``: None lets the run take the preset's)."""
-    keys = ("link", "water", "attenuation", "bit_rate") + (("distance",) if distance else ())
-    return {k: getattr(args, k) for k in keys}
+    keys = ("link", "water", "attenuation", "bit_rate", "depth", "transmitter_depth",
+            "receiver_dome") + (
+        ("distance",) if distance else ())
+    return {k: getattr(args, k) for k in keys if hasattr(args, k)}
 
 
 def simulate(args) -> int:
@@ -71,7 +73,9 @@ def simulate(args) -> int:
     world = LinkWorld(WorldConfig(constants=constants, torque_limit=args.torque_limit,
                                   integrator=args.integrator,
                                   led_yaw=math.radians(args.led_yaw),
-                                  led_lateral_offset=args.led_offset, **extra))
+                                  led_lateral_offset=args.led_offset, depth=args.depth,
+                                  transmitter_depth=args.transmitter_depth,
+                                  receiver_dome=args.receiver_dome, **extra))
     world.reset(gimbal_angle=args.gimbal_angle)
     sensor = IrradianceSensor(world, seed=args.seed)
     t0 = time.perf_counter()

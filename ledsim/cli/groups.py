@@ -6,10 +6,12 @@ from __future__ import annotations
 from .options import (
     ATTENUATION,
     BIT_RATE,
+    DEPTH,
     DISTANCE,
     PARTICLES,
     SECONDS,
     TORQUE_LIMIT,
+    TRANSMITTER_DEPTH,
     number,
 )
 
@@ -25,8 +27,9 @@ def add_world_args(p, distance_help="link distance d [m] (default: 0.085 for --l
     add_scene_args(p)
 
 
-def add_link_args(p) -> None:
-    """The physical link: its preset, the water and the data's bit rate."""
+def add_link_args(p, sea: bool = True) -> None:
+    """The physical link: its preset, the water and the data's bit rate (and, with
+    ``sea``, the vehicles' depths)."""
     from ..radiometry.presets import DEFAULT_LINK, LINK_PRESETS
     from ..radiometry.water import WATER_TYPES
 
@@ -40,6 +43,17 @@ def add_link_args(p) -> None:
     p.add_argument("--bit-rate", type=BIT_RATE, default=None, metavar="R",
                    help="the data's bit rate [bit/s] (default: the preset's; 1000 for the "
                    "paper's bench)")
+    if sea:
+        from ..physics.scene import DEFAULT_DEPTH
+
+        p.add_argument("--depth", type=DEPTH, default=DEFAULT_DEPTH, metavar="D",
+                       help="the receiver vehicle's depth below the still surface [m]: the "
+                       "waves' decay, flicker's daylight, the surface in the video")
+        p.add_argument("--transmitter-depth", type=TRANSMITTER_DEPTH, default=None,
+                       metavar="D", help="the LED's depth [m] (default: the receiver's)")
+        p.add_argument("--receiver-dome", action="store_true",
+                       help="the receiver's head turns inside a dome, out of the water's "
+                       "flow (default: open to it, as on the paper's bench)")
 
 
 def resolved_distance(args) -> float:

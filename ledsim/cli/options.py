@@ -31,6 +31,8 @@ def number(lo: float, hi: float, unit: str = "", *, integer: bool = False,
 DISTANCE = number(0.0, 500.0, "m", lo_open=True)
 ATTENUATION = number(0.0, 100.0, "1/m")
 BIT_RATE = number(0.0, 1e10, "bit/s", lo_open=True)
+DEPTH = number(1.0, 500.0, "m")
+TRANSMITTER_DEPTH = number(0.2, 500.0, "m")
 SECONDS = number(0.0, 3600.0, "s", lo_open=True)
 SEED = number(0, 2**32 - 1, integer=True)
 SEEDS = number(1, 10_000, integer=True)

@@ -127,7 +127,7 @@ def build_parser() -> argparse.ArgumentParser:
 
     bg = command("budget", "the link budget against distance: SNR, BER, throughput, FEC "
                   "share and the range at the FEC limit, for a --link preset")
-    add_link_args(bg)
+    add_link_args(bg, sea=False)
     bg.add_argument("--distance", action="append", type=DISTANCE, default=[],
                     help="a distance [m] (repeatable; default: 12 from a tenth of the FEC "
                     "range to twice it)")

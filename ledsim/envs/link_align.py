@@ -118,6 +118,9 @@ class LinkAlignEnv(gym.Env, EzPickle):
         link, water, attenuation, bit_rate: the physical link (``ledsim run --link``,
             ``--water``, ``--attenuation`` [1/m], ``--bit-rate`` [bit/s]); ``paper``: the
             paper's bench. ``distance`` is then in metres of water too.
+        depth, transmitter_depth: the receiver vehicle's and the LED's depth [m]
+            (``--depth``, ``--transmitter-depth``; None: the receiver's);
+            ``receiver_dome``: the head turns inside a dome (``--receiver-dome``).
     """
 
     metadata = {"render_modes": ["rgb_array"], "render_fps": 100}
@@ -134,13 +137,16 @@ class LinkAlignEnv(gym.Env, EzPickle):
                  acquisition: str = TaskPart.acquisition, link: str = WorldPart.link,
                  water: str | None = WorldPart.water,
                  attenuation: float | None = WorldPart.attenuation,
-                 bit_rate: float | None = WorldPart.bit_rate):
+                 bit_rate: float | None = WorldPart.bit_rate,
+                 depth: float = WorldPart.depth,
+                 transmitter_depth: float | None = WorldPart.transmitter_depth,
+                 receiver_dome: bool = WorldPart.receiver_dome):
         # Pickles as its constructor arguments (MuJoCo's model does not pickle), as
         # Gymnasium's MuJoCo environments do: the copy is a new environment.
         EzPickle.__init__(self, scenario, distance, noise_scale, disturbances, torque_limit,
                           frame_skip, phi0_range, render_mode, width, height, camera,
                           integrator, scene, imu, station_keeping, acquisition, link, water,
-                          attenuation, bit_rate)
+                          attenuation, bit_rate, depth, transmitter_depth, receiver_dome)
         if render_mode not in (None, "rgb_array"):
             raise ValueError(f"render_mode={render_mode!r}: use None or 'rgb_array'")
         if int(frame_skip) < 1:
@@ -150,7 +156,9 @@ class LinkAlignEnv(gym.Env, EzPickle):
         self.cfg = RunConfig.of(
             WorldPart(distance, torque_limit, noise_scale, scene, integrator,
                       bool(station_keeping), link=link, water=water,
-                      attenuation=attenuation, bit_rate=bit_rate),
+                      attenuation=attenuation, bit_rate=bit_rate, depth=depth,
+                      transmitter_depth=transmitter_depth,
+                      receiver_dome=bool(receiver_dome)),
             TaskPart(scenario=scenario or TaskPart.scenario, disturbances=tuple(disturbances),
                      acquisition=acquisition),
             # The env needs no estimator; its policy names its own (on a physical link

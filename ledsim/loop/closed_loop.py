@@ -146,6 +146,9 @@ class LoopRun:
         self.u = np.zeros(steps)
         self.measured = np.ones((steps, npd), dtype=bool)
         self.outside = np.zeros(steps, dtype=bool)  # the estimator left its training box
+        # The medium's factor on the reference photodiode's power (scintillation): the
+        # most it could receive fades with it, so a fade is not a pointing loss.
+        self.medium = np.ones(steps)
         # The vehicle's navigated position [m] and its station (None: no vehicle).
         self.navigated = np.full((steps, 3), np.nan)
         v = self.vehicle
@@ -160,6 +163,8 @@ class LoopRun:
         self.state[k] = r.phi, r.phidot
         self.gimbal[k] = r.gimbal_angle, r.gimbal_rate
         self.hull[k], self.power[k], self.clean[k] = r.hull_pos, r.power, r.power_clean
+        if self.world.light_gain is not None:
+            self.medium[k] = self.world.light_gain[self.world.config.constants.layout.reference]
         if self.vehicle is not None:
             self.navigated[k] = self.vehicle.navigation.position
         t0 = time.perf_counter()
@@ -265,7 +270,7 @@ class ClosedLoop:
                         None if run.given is None else
                         run.given.series(run.step.estimator, self.cfg, run.u,
                                          run.measured), run.noise,
-                        (self.model, run.u, run.measured), run.outside)
+                        (self.model, run.u, run.measured), run.outside, run.medium)
                 for i, run in enumerate(runs)]
 
 

@@ -7,7 +7,7 @@ from dataclasses import asdict, dataclass, fields, replace
 
 from ..config import NavigationNoise
 from ..physics.disturbances import parse_disturbance
-from ..physics.scene import WorldConfig
+from ..physics.scene import DEFAULT_DEPTH, WorldConfig
 from ..physics.vehicle import StationKeeping
 from ..radiometry.presets import default_distance, link_constants, preset_named
 from ..scenario import Scenario
@@ -48,6 +48,11 @@ class WorldPart:
         water: the water type (None: the preset's); ``attenuation``: its beam
             attenuation c instead [1/m] (None: the type's).
         bit_rate: the data's bit rate [bit/s] (None: the preset's).
+        depth: the receiver vehicle's depth below the still surface [m] (the waves'
+            decay, the daylight of ``flicker``, the surface in the video).
+        transmitter_depth: the LED's depth [m] (None: the receiver's).
+        receiver_dome: the receiver's head turns inside a dome, out of the water's flow
+            (``--receiver-dome``).
     """
 
     distance: float | None = None
@@ -62,6 +67,9 @@ class WorldPart:
     water: str | None = None
     attenuation: float | None = None
     bit_rate: float | None = None
+    depth: float = DEFAULT_DEPTH
+    transmitter_depth: float | None = None
+    receiver_dome: bool = False
 
     def __post_init__(self) -> None:
         if self.distance is None:  # the link preset's (0.085 m on the paper's bench)
@@ -83,6 +91,8 @@ class WorldPart:
         return WorldConfig(constants=link_constants(self.link, d, self.water,
                                                     self.attenuation),
                            torque_limit=self.torque_limit, integrator=self.integrator,
+                           depth=self.depth, transmitter_depth=self.transmitter_depth,
+                           receiver_dome=self.receiver_dome,
                            **extra)
 
 
@@ -205,6 +215,9 @@ class RunConfig:
     water: str | None = WorldPart.water
     attenuation: float | None = WorldPart.attenuation
     bit_rate: float | None = WorldPart.bit_rate
+    depth: float = WorldPart.depth
+    transmitter_depth: float | None = WorldPart.transmitter_depth
+    receiver_dome: bool = WorldPart.receiver_dome
 
     def __post_init__(self) -> None:
         if self.distance is None:  # the link preset's (0.085 m on the paper's bench)

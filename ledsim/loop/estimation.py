@@ -54,12 +54,21 @@ def served(cfg: RunConfig) -> bool:
     return not uses_reference(cfg) or cfg.link != "paper" or lo <= cfg.distance <= hi
 
 
+#: On a physical link, the scheduled KKL holds its gain while the motor works against
+#: a load (mean |u| above this [rad/s^2]; quiet water: 0.01-0.02, beam seas and
+#: currents: 0.5-2): GainSchedule.driven. None: the paper's schedule everywhere.
+DRIVEN_LEVEL: float | None = 0.3
+DRIVEN_GAIN = 2.0
+
+
 def reference_world(cfg: RunConfig) -> WorldConfig:
     """The world the run's shipped KKL was trained in: the bench at
     :data:`REFERENCE_DISTANCE`, or on a physical link the bench with the physical
     receiver (:func:`~ledsim.radiometry.presets.kkl_reference_constants`)."""
-    # The bench's own water: the tracker takes another water's attenuation as a gain.
-    ref = replace(cfg, water=None, attenuation=None).world_config(distance=REFERENCE_DISTANCE)
+    # The bench's own water: the tracker takes another water's attenuation as a gain;
+    # and the bench's level LED (the models know only the turning plane).
+    ref = replace(cfg, water=None, attenuation=None, transmitter_depth=None).world_config(
+        distance=REFERENCE_DISTANCE)
     if cfg.link == "paper":
         return ref
     return replace(ref, constants=kkl_reference_constants())
@@ -180,7 +189,7 @@ def loop_estimator(cfg: RunConfig, system: GimbalSystem, model: IdentifiedGimbal
             # What the KKL knows: the reference distance's model, and the supervisor's
             # gain tracker for the rest; the sensor's noise, rescaled to the model's gain
             # by the distance's prior (as the KKL bank picks its member).
-            ref = cfg.world_config(distance=REFERENCE_DISTANCE)
+            ref = replace(cfg, transmitter_depth=None).world_config(distance=REFERENCE_DISTANCE)
             prior = peak_power(system.constants) / peak_power(ref.constants)
             noise = run_noise(cfg, system) if noise is None else noise
             system = member_system(noisier(ref, noise.scale / prior))
@@ -204,6 +213,11 @@ def loop_estimator(cfg: RunConfig, system: GimbalSystem, model: IdentifiedGimbal
     observers = [build_estimator("kkl", ref if m.world == first else member_system(m.world),
                                  model=omega_f, checkpoint=m.checkpoint,
                                  use_omega=cfg.omega_model != "none") for m in members]
+    if cfg.link != "paper" and DRIVEN_LEVEL is not None:  # metres of sea: docs/sea.md
+        for o in observers:
+            if hasattr(o, "schedule"):
+                o.schedule = replace(o.schedule, driven=DRIVEN_LEVEL,
+                                     driven_gain=DRIVEN_GAIN)
     if len(observers) == 1:
         return observers[0], ref
     # A switch waits 2 s: a vibrating hull moves the gain for a moment, not for good.

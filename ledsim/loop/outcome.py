@@ -101,17 +101,22 @@ def outcome(res, xhat: np.ndarray, flags: np.ndarray, cfg: RunConfig, constants,
             keep_trace: bool, navigation: Navigation | None = None,
             window: float | None = None, station_keeping: bool | None = None,
             given: dict | None = None, noise=None, bound_inputs=None,
-            outside: np.ndarray | None = None) -> RunOutcome:
+            outside: np.ndarray | None = None,
+            medium: np.ndarray | None = None) -> RunOutcome:
     """A run's :class:`RunOutcome` from its simulation result, its estimates, its
     (lost, acquiring) flags per step, the seconds spent controlling and in all, its
     vehicle's :class:`Navigation` (None: no vehicle) and the window [s] of per-window
     metrics (None: none). ``noise``: the run's measurement noise (None: the link's at
     the run's noise scale). ``bound_inputs``: (the estimators' model, the input u each
     step told them [rad/s^2], the samples the gate passed) for the bound (None: none);
-    ``outside``: the steps whose estimator was outside its training box (None: none)."""
+    ``outside``: the steps whose estimator was outside its training box (None: none);
+    ``medium``: the water's factor on the reference photodiode's power each step
+    (scintillation; None: 1)."""
     events = [d for d in disturbances if d.event_end is not None]
     flags = flags.reshape(-1, 2)
     best = achievable_power(res, constants)
+    if medium is not None:  # the medium's fading (scintillation) is not a pointing loss
+        best = best * medium
     noise = constants.measurement_noise(cfg.noise_scale) if noise is None else noise
     bound = None
     if bound_inputs is not None and len(res.t):

@@ -119,6 +119,9 @@ class RunSummary(DictAccess):
     attenuation: float | None = None
     received_power_w: Stat | None = None
     schema_version: int = SCHEMA_VERSION
+    depth: float | None = None
+    transmitter_depth: float | None = None
+    receiver_dome: bool | None = None
 
 
 #: The per-window metrics a summary gives over the seeds (:class:`WindowMetrics`).
@@ -182,7 +185,9 @@ def summarize(cfg: RunConfig, outs: list[RunOutcome]) -> RunSummary:
         link=cfg.link,
         water=cfg.water if constants.link is None else constants.link.water.name,
         attenuation=constants.attenuation,
-        received_power_w=stat(lambda o: o.metrics.mean_power))
+        received_power_w=stat(lambda o: o.metrics.mean_power),
+        depth=cfg.depth, transmitter_depth=cfg.transmitter_depth,
+        receiver_dome=cfg.receiver_dome)
 
 
 def _job(args) -> RunOutcome:

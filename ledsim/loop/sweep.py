@@ -28,6 +28,7 @@ from pathlib import Path
 
 from ..errors import LedsimError
 from ..outputs import atomic_write_text
+from ..physics.scene import DEFAULT_DEPTH
 from ..results import to_jsonable
 from .config import RunConfig
 from .report import Stat
@@ -40,7 +41,7 @@ NO_DISTURBANCE = "none"
 #: Columns of ``results.csv`` that describe the cell.
 CELL_COLUMNS = ("scenario", "estimator", "disturbance", "distance", "noise_scale", "seed",
                 "seconds", "supervision", "imu", "station_keeping", "link", "water",
-                "bit_rate")
+                "bit_rate", "depth")
 #: Columns that measure the run (units as in :class:`~ledsim.loop.metrics.RunMetrics`).
 METRIC_COLUMNS = ("rmse_x1", "rmse_x2", "rmse_steady_x1", "rmse_steady_x2",
                   "alignment_time", "availability", "mean_power", "recovery_time",
@@ -62,7 +63,9 @@ def split_disturbance(cell: str) -> tuple[str, ...]:
 
 #: The link's settings at their defaults stay out of a cell's key, so that a sweep
 #: folder of the paper's bench from before them resumes.
-_LINK_DEFAULTS = {"link": "paper", "water": None, "attenuation": None, "bit_rate": None}
+_LINK_DEFAULTS = {"link": "paper", "water": None, "attenuation": None, "bit_rate": None,
+                  "depth": DEFAULT_DEPTH, "transmitter_depth": None,
+                  "receiver_dome": False}
 
 
 @dataclass(frozen=True)
@@ -158,6 +161,7 @@ def run_cell(job: tuple[RunConfig, Cell]) -> dict:
            "navigation_error_rms": m.navigation_error_rms,
            "us_per_step": out.us_per_step, "realtime_factor": out.realtime_factor,
            "link": cfg.link, "water": cfg.water, "bit_rate": cfg.data_bit_rate,
+           "depth": cfg.depth,
            "received_power_w": m.mean_power}
     return {"version": __version__, "row": to_jsonable(row)}
 

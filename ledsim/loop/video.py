@@ -40,8 +40,9 @@ def render_video(cfg: RunConfig, seed: int, out: Path, spec: VideoSpec,
 
     def on_step(run, t):
         if not recorder:
+            waves = [d.wave for d in run.disturbances if hasattr(d, "wave")]
             recorder.append(FrameRecorder(run.world, spec.width, spec.height, spec.fps,
-                                          spec.camera, writer, label=label))
+                                          spec.camera, writer, label=label, waves=waves))
         status = ""
         if run.supervised:
             d = run.step.decision

@@ -15,7 +15,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from ..optics import received_power, transmitter_gain
+from ..optics import received_power, receiver_response, transmitter_gain
 from .batch import WorldBatch, cross3, dot3
 from .sensor import IrradianceSensor, SensorReading
 
@@ -119,6 +119,9 @@ class BatchSensor:
             s = self.sensors[n]
             vis[n, i] = s.visible_fraction(int(i), s.aperture_points())
         clean = received_power(transmitter_gain(dist, theta, c), phi, c.receiver, vis)
+        if c.link is not None:  # a real receiver's cone: the elevation costs power too
+            elevation = np.arcsin(np.clip(dot3(u, hinge), -1.0, 1.0))
+            clean = clean * receiver_response(elevation, c.receiver)
         return clean, phi, theta, dist, vis, rays
 
     def read(self) -> BatchReading:
@@ -126,10 +129,18 @@ class BatchSensor:
         noise is used)."""
         b = self.batch
         clean, phi, theta, dist, vis, rays = self.clean()
+        worlds = [s.world for s in self.sensors]
+        lit = any(w.light_gain is not None or w.light_noise is not None for w in worlds)
+        if lit:  # the light around the receiver (ledsim.physics.light)
+            clean = clean * np.stack([np.ones(clean.shape[1]) if w.light_gain is None
+                                      else w.light_gain for w in worlds])
         if self.signal_noise:
             power = self.sensors[0].measurement_noise.measure_with(self.noise[self.k], clean)
         else:
             power = clean + self.noise[self.k]
+        if lit:
+            power = power + np.stack([np.zeros(clean.shape[1]) if w.light_noise is None
+                                      else w.light_noise for w in worlds])
         self.k += 1
         return BatchReading(power, clean, phi, theta, dist, vis, phi[:, b.reference].copy(),
                             self.incidence_rate0(), b.qpos_hinge.copy(),

@@ -10,11 +10,13 @@ name              what it does
 ================  ============================================================
 vibration         sinusoidal yaw torque and sway force on the AUV hull
 current           water current: steady velocity plus random gusts (opt.wind)
-waves             the orbital velocity of surface waves at the vehicle's depth
+waves             linear waves: strip forces along the hull (or one medium velocity)
 transmitter       the LED platform sways sideways and rotates (yaw)
 occlusion         a plate crosses the line of sight for ``duration`` seconds
 kick              an angular-rate impulse to the gimbal or the hull at ``start``
 dvl_dropout       the DVL loses bottom lock for ``duration`` s (every ``every`` s)
+flicker           daylight's shot noise, flickering as the waves focus it
+scintillation     log-normal fading of the LED's light (turbulence, bubbles)
 ================  ============================================================
 """
 
@@ -27,6 +29,7 @@ import numpy as np
 
 from ..keyvalues import parse_key_values
 from .disturbance_base import Disturbance, DisturbanceError  # noqa: F401 (re-exported)
+from .light import Scintillation, SunlightFlicker
 from .water import WaterCurrent, Waves
 from .world import LinkWorld
 
@@ -123,16 +126,23 @@ RANGES = {
     "hold": (0.0, 1.0, "(0 or 1)", False),
     "hull": (0.0, 1.0, "(0 or 1)", False),
     "seed": (0, 2**32 - 1, "", False),
-    "sway": (-0.1, 0.1, "m", False),
+    "sway": (-5.0, 5.0, "m", False),  # a second vehicle metres away sways by dm
     "yaw": (-math.pi / 2, math.pi / 2, "rad", False),
     "start": (0.0, 3600.0, "s", False),
     "rate": (-50.0, 50.0, "rad/s", False),
     "duration": (0.0, 3600.0, "s", True),
-    "drift": (-0.05, 0.05, "m/s", False),
+    "drift": (-0.5, 0.5, "m/s", False),
     "drift_until": (0.0, 3600.0, "s", False),
     "height": (0.0, 20.0, "m", False),
     "period": (1.0, 30.0, "s", False),
     "depth": (1.0, 500.0, "m", False),
+    "strips": (0, 64, "", False),
+    "irradiance": (0.0, 5.0, "W m^-2 nm^-1", False),
+    "contrast": (0.0, 3.0, "", False),
+    "index": (0.0, 1.0, "(scintillation index)", True),
+    "time": (1e-5, 10.0, "s", False),
+    "correlation": (0.0, 1.0, "", False),
+    "sea_depth": (0.0, 11000.0, "m (0: deep water)", False),
     "every": (0.0, 3600.0, "s", False),
 }
 
@@ -210,6 +220,8 @@ DISTURBANCES = {
     "occlusion": Occlusion,
     "kick": Kick,
     "dvl_dropout": DvlDropout,
+    "flicker": SunlightFlicker,
+    "scintillation": Scintillation,
 }
 
 
@@ -222,7 +234,7 @@ def parse_disturbance(text: str) -> Disturbance:
     cls = DISTURBANCES[name]
     items = list(filter(None, args.split(",")))
     kwargs = parse_key_values(items, [f.name for f in fields(cls)], name, DisturbanceError,
-                              integers=("seed",))
+                              integers=("seed", "strips"))
     texts = dict(i.partition("=")[::2] for i in items)
     for key, v in kwargs.items():
         lo, hi, unit, lo_open = RANGES[key]

@@ -34,6 +34,15 @@ def axis_limits(values, base: tuple[float, float], step: float) -> tuple[float, 
     return lo, hi
 
 
+def power_unit(peak: float) -> tuple[float, str]:
+    """(factor, unit) that show a power of ``peak`` [W] as a number of at least 1: W on
+    the paper's bench, nW on a link tens of metres long."""
+    for factor, unit in ((1.0, "W"), (1e3, "mW"), (1e6, "uW"), (1e9, "nW")):
+        if peak * factor >= 1.0:
+            return factor, unit
+    return 1e12, "pW"
+
+
 class Overlay:
     """Panel with the time and scrolling traces of phi and of P1, P2.
 
@@ -83,7 +92,8 @@ class Overlay:
         lim_p = axis_limits(np.concatenate([list(self.p1), list(self.p2)]),
                             (-0.1 * peak_power, 1.1 * peak_power), 0.5 * peak_power)
         self._axes(d, boxes[0], lim_phi, "{:+.1f}", zero=True)
-        self._axes(d, boxes[1], lim_p, "{:.1f}", zero=False)
+        scale, unit = power_unit(peak_power)
+        self._axes(d, boxes[1], lim_p, "{:.1f}", zero=False, scale=scale)
         self._trace(d, boxes[0], self.phi, lim_phi, TRUE)
         if self.estimate:
             self._trace(d, boxes[0], self.phihat, lim_phi, ESTIMATE)
@@ -91,7 +101,7 @@ class Overlay:
         self._trace(d, boxes[1], self.p2, lim_p, P2)
         legend = "phi [rad]: true (white)" + (", estimate (blue)" if self.estimate else "")
         d.text((8, y0 + 4), legend, fill=TEXT, font=self.font)
-        d.text((half + 8, y0 + 4), "power [W]: P1 (blue), P2 (orange)", fill=TEXT,
+        d.text((half + 8, y0 + 4), f"power [{unit}]: P1 (blue), P2 (orange)", fill=TEXT,
                font=self.font)
         d.text((8, 6), f"t = {t:5.2f} s   {self.label}", fill=(255, 255, 255), font=self.font)
         if self.vehicle:
@@ -103,14 +113,14 @@ class Overlay:
             d.text((x0 + 6, 8), text, fill=(0, 0, 0), font=self.font)
         return np.asarray(img)
 
-    def _axes(self, d, box, limits, fmt: str, zero: bool) -> None:
+    def _axes(self, d, box, limits, fmt: str, zero: bool, scale: float = 1.0) -> None:
         """Frame, a tick at each end of the value axis, a zero line, and a time axis with
         a tick per second (0 s is now, at the right)."""
         x0, y0, x1, y1 = box
         lo, hi = limits
         d.rectangle(box, outline=(90, 110, 120))
         for value, y in ((hi, y0), (lo, y1)):
-            d.text((x0 - 4 * self.font_px, y - self.font_px // 2), fmt.format(value),
+            d.text((x0 - 4 * self.font_px, y - self.font_px // 2), fmt.format(value * scale),
                    fill=TEXT, font=self.font)
         if zero and lo < 0 < hi:
             y = y1 - (0 - lo) / (hi - lo) * (y1 - y0)

@@ -10,7 +10,10 @@ frame shows:
 - orange arrows above the yoke for the thrusters' surge, sway and heave effort (2 mm
   per newton, from a point the side camera sees);
 - a panel with the time, true vs estimated phi, the two powers, and a line on the
-  vehicle: IMU on or off, the hull's offset and heading, the thrust.
+  vehicle: IMU on or off, the hull's offset and heading, the thrust;
+- on a physical link (:mod:`ledsim.physics.sea_render`), the beam's cone dimmed by the
+  water, the surface with its waves, fog from the water's attenuation, and a docking
+  station under the LED (:mod:`ledsim.physics.sea_scene`).
 """
 
 from __future__ import annotations
@@ -26,6 +29,7 @@ from ..errors import LedsimError
 from ..optics import peak_power
 from ..outputs import INTERRUPTED, umask
 from .overlay import STATUS_BADGES, Overlay  # noqa: F401 (re-exported)
+from .sea_render import add_beam_cone, add_surface
 from .sensor import SensorReading
 from .world import LinkWorld
 
@@ -166,7 +170,7 @@ class FrameRecorder:
 
     def __init__(self, world: LinkWorld, width: int, height: int, fps: float,
                  camera: str, writer: VideoWriter | None = None, label: str = "",
-                 estimate: bool = True):
+                 estimate: bool = True, waves=()):
         if camera not in world.camera_names():
             raise RenderError(f"--camera {camera!r} is not in the scene: choose from "
                               f"{', '.join(world.camera_names())}")
@@ -181,6 +185,9 @@ class FrameRecorder:
         self.peak = peak_power(world.config.constants)
         self.last_frame: np.ndarray | None = None
         self.option = scene_option()
+        #: A physical link's sea: the beam's cone, the surface and these waves on it.
+        self.sea = world.config.constants.link is not None
+        self.waves = list(waves)
 
     def __call__(self, t: float, world: LinkWorld, reading: SensorReading, xhat,
                  status: str = "") -> None:
@@ -204,6 +211,9 @@ class FrameRecorder:
         add_beams(r.scene, self.world, reading, blocking_points(self.world),
                   self.peak)
         add_thrust_arrows(r.scene, self.world)
+        if self.sea:
+            add_beam_cone(r.scene, self.world)
+            add_surface(r.scene, self.world, self.waves, t)
         frame = r.render()
         return self.overlay.draw(frame, t, self.peak)
 

@@ -11,18 +11,28 @@ from __future__ import annotations
 import math
 from dataclasses import dataclass, field
 from pathlib import Path
-from typing import NamedTuple
 
 import mujoco
 import numpy as np
 
 from ..config import ConfigError, LinkConstants
 from ..errors import LedsimError
-from ..layout import ReceiverLayout
 from ..resources import scene_path
+from .scene_ids import (  # noqa: F401 (re-exported)
+    MAGNETOMETER,
+    THRUSTERS,
+    VEHICLE_SENSORS,
+    SceneIds,
+    VehicleMotion,
+)
+from .sea_scene import apply_sea
 
 #: Former module-level name of the default scene.
 SCENE = scene_path()
+
+
+#: The receiver vehicle's depth below the still surface when a run sets none [m].
+DEFAULT_DEPTH = 10.0
 
 
 class WorldError(LedsimError):
@@ -61,6 +71,15 @@ class WorldConfig:
         metacentric_height: the hull's centre of buoyancy above its centre of mass [m]
             (BG): buoyancy's righting moment in pitch and roll. 2 cm, the order of a
             small torpedo AUV's (a REMUS-100's is about 1-2 cm).
+        depth: the receiver vehicle's depth below the still surface [m] (the waves'
+            decay, the daylight, the surface in the video); the hull starts at world
+            z = 0, so the surface is at z = ``depth``.
+        transmitter_depth: the LED's depth [m] (None: the receiver's). A different depth
+            puts the LED above or below the receiver's plane: an elevation the one-axis
+            gimbal cannot turn to.
+        receiver_dome: the receiver's head turns inside a dome (a window over the
+            gimbal): the water's flow puts no torque on it. False: the head is open to
+            the water, as on the paper's bench (docs/sea.md measures both).
     """
 
     constants: LinkConstants = field(default_factory=LinkConstants)
@@ -77,6 +96,9 @@ class WorldConfig:
     aperture_radius: float = 0.003
     integrator: str = "implicitfast"
     metacentric_height: float = 0.02
+    depth: float = DEFAULT_DEPTH
+    transmitter_depth: float | None = None
+    receiver_dome: bool = False
 
     def __post_init__(self):
         if self.integrator not in INTEGRATORS:
@@ -93,7 +115,11 @@ class WorldConfig:
             ("aperture_radius", self.aperture_radius, self.aperture_radius >= 0, ">= 0 m"),
             ("metacentric_height", self.metacentric_height, self.metacentric_height >= 0,
              ">= 0 m"),
+            ("depth", self.depth, 1.0 <= self.depth <= 500.0, "in [1, 500] m"),
         ]
+        if self.transmitter_depth is not None:
+            checks.append(("transmitter_depth", self.transmitter_depth,
+                           0.2 <= self.transmitter_depth <= 500.0, "in [0.2, 500] m"))
         if self.hull_mass is not None:
             checks.append(("hull_mass", self.hull_mass, self.hull_mass > 0, "> 0 kg"))
         for name, value, ok, allowed in checks:
@@ -169,7 +195,19 @@ def build_spec(config: WorldConfig) -> mujoco.MjSpec:
     centre_local = np.mean([np.asarray(site.pos) for site in sites], axis=0)
     centre = np.asarray(gimbal.pos) + centre_local
     tx = spec.body("transmitter")
-    tx.pos = [centre[0] + c.distance, centre[1] + config.led_lateral_offset, centre[2]]
+    # the LED's depth lifts it out of the receiver's plane; d stays the slant distance
+    rise = 0.0 if config.transmitter_depth is None else config.depth - config.transmitter_depth
+    if abs(rise) >= c.distance:
+        raise WorldError(f"transmitter_depth={config.transmitter_depth:g} m is not allowed "
+                         f"with depth={config.depth:g} m: the depths must differ by less "
+                         f"than the link distance {c.distance:g} m")
+    ahead = math.sqrt(c.distance**2 - rise**2)
+    tx.pos = [centre[0] + ahead, centre[1] + config.led_lateral_offset, centre[2] + rise]
+    if config.receiver_dome:  # the head turns in still water behind a window
+        spec.geom("gimbal_housing").fluid_ellipsoid = 0.0
+    if c.link is not None:  # metres of water: a docking station, fog, a wider view
+        apply_sea(spec, c.link.water_at_led.attenuation, centre, np.asarray(tx.pos),
+                  config.depth)
     _set_yaw(tx, config.led_yaw)
 
     for axis in layout.axes:
@@ -198,96 +236,3 @@ def set_buoyancy(m: mujoco.MjModel, auv: int, gimbal: int, water_density: float)
             volume += 8.0 * float(np.prod(size))
     m.body_gravcomp[auv] = water_density * volume / m.body_mass[auv]
     m.body_gravcomp[gimbal] = 1.0 if water_density > 0 else 0.0
-
-
-@dataclass(frozen=True)
-class SceneIds:
-    """MuJoCo ids and addresses of the scene's named parts, read once when it compiles
-    (for code that works on MuJoCo's arrays directly: the world batch, the rollouts).
-
-    Attributes:
-        hull_body, gimbal_body: body ids of the AUV and of the receiver gimbal.
-        photodiode_sites: site ids of the layout's photodiodes, in its order; led_site:
-            the LED's site id.
-        hinge_qpos, hinge_dof: the gimbal axis's hinge's address in qpos and in qvel.
-        motor: actuator id of the gimbal axis's motor.
-        vehicle_sensors: sensordata addresses of the vehicle's sensors, in the order of
-            :data:`VEHICLE_SENSORS` (None: the scene lacks one of them).
-        thrusters: actuator ids of the hull's surge, sway, heave, pitch and yaw thrusters
-            (None: the scene lacks one of them).
-        magnetometer: sensordata address of the IMU's magnetometer, the heading
-            reference (None: the scene has none; the navigation then has no heading
-            reference).
-        usbl_site: site id of the USBL transceiver the acoustic fixes are measured from
-            (None: the scene has none; a fix's error then does not grow with range).
-        missing_sensors: names of :data:`VEHICLE_SENSORS` the scene lacks.
-    """
-
-    hull_body: int
-    gimbal_body: int
-    photodiode_sites: tuple[int, ...]
-    led_site: int
-    hinge_qpos: int
-    hinge_dof: int
-    motor: int
-    vehicle_sensors: tuple[int, ...] | None = None
-    thrusters: tuple[int, ...] | None = None
-    magnetometer: int | None = None
-    usbl_site: int | None = None
-    missing_sensors: tuple[str, ...] = ()
-
-    @classmethod
-    def of(cls, m, layout: ReceiverLayout | None = None) -> SceneIds:
-        """The ids of model ``m`` built for the receiver ``layout`` (None: the paper's)."""
-        layout = LinkConstants().layout if layout is None else layout
-        (axis,) = layout.validate().axes
-        hinge = m.joint(axis.joint)
-        sensors = [m.sensor(i).name for i in range(m.nsensor)]
-        missing = tuple(n for n in VEHICLE_SENSORS if n not in sensors)
-        adr = None if missing else tuple(int(m.sensor(n).adr[0]) for n in VEHICLE_SENSORS)
-        actuators = [m.actuator(i).name for i in range(m.nu)]
-        thrusters = (tuple(int(m.actuator(n).id) for n in THRUSTERS)
-                     if all(n in actuators for n in THRUSTERS) else None)
-        mag = int(m.sensor(MAGNETOMETER).adr[0]) if MAGNETOMETER in sensors else None
-        sites = [m.site(i).name for i in range(m.nsite)]
-        usbl = int(m.site("usbl").id) if "usbl" in sites else None
-        return cls(int(m.body("auv").id), int(m.body("gimbal").id),
-                   tuple(int(m.site(p.site).id) for p in layout.photodiodes),
-                   int(m.site("led").id), int(hinge.qposadr[0]), int(hinge.dofadr[0]),
-                   int(m.actuator(axis.motor).id), adr, thrusters, mag, usbl, missing)
-
-
-#: The vehicle's MuJoCo sensors by name: the IMU's gyro and accelerometer, the DVL (a
-#: velocimeter), the gimbal's encoder (jointpos) and the acoustic position fix (framepos).
-VEHICLE_SENSORS = ("imu_gyro", "imu_accel", "dvl_velocity", "gimbal_encoder",
-                   "acoustic_fix")
-#: The IMU's magnetometer, the navigation's heading reference (optional in a scene).
-MAGNETOMETER = "imu_magnetometer"
-
-
-#: The hull's thrusters by name: surge, sway and heave forces [N], pitch and yaw
-#: torques [N m].
-THRUSTERS = ("thruster_surge", "thruster_sway", "thruster_heave", "thruster_pitch",
-             "thruster_yaw")
-
-
-class VehicleMotion(NamedTuple):
-    """The noise-free values of the vehicle's sensors at one instant (SI units).
-
-    Attributes:
-        gyro: hull angular velocity in the IMU frame [rad/s], (3,).
-        accel: specific force in the IMU frame [m/s^2], (3,) (from the last physics step).
-        dvl: hull velocity at the DVL in its frame [m/s], (3,) (z points down).
-        encoder: the gimbal hinge angle [rad].
-        position: the IMU's position in the world frame [m], (3,).
-        magnetometer: the magnetic field in the IMU frame [T], (3,) (None: the scene
-            has no magnetometer).
-    """
-
-    gyro: np.ndarray
-    accel: np.ndarray
-    dvl: np.ndarray
-    encoder: float
-    position: np.ndarray
-    magnetometer: np.ndarray | None = None
-

@@ -186,15 +186,39 @@ class IrradianceSensor:
         geo = self.geometry()
         clean = np.array([self._clean_power_at(*g) for g in zip(*geo, strict=True)])
         dist, theta, phi, vis = (np.array(v) for v in geo)
-        n, ref = len(clean), self._reference
+        n, ref, w = len(clean), self._reference, self.world
+        if self.constants.link is not None:  # a real receiver's cone: its elevation too
+            clean = clean * self.elevation_response()
+        if w.light_gain is not None:  # the light around the receiver (physics.light)
+            clean = clean * w.light_gain
         if noise and self.signal_noise:
             power = self.measurement_noise.measure(clean, self.rng)
         else:
             power = clean + (self.rng.standard_normal(n) * self.noise_std if noise else 0.0)
-        w = self.world
+        if noise and w.light_noise is not None:
+            power = power + w.light_noise
         return SensorReading(power, clean, phi, theta, dist, vis, float(phi[ref]),
                              self.incidence_rate(ref), w.gimbal_angle, w.gimbal_rate,
                              w.hull_pos.copy())
+
+    def elevation(self) -> np.ndarray:
+        """Each photodiode's LED elevation out of its turning plane [rad]: the angle
+        between the line of sight and the plane normal to the hinge axis, which a
+        one-axis gimbal cannot turn to."""
+        w = self.world
+        h = w.hinge_axis
+        out = []
+        for i in self._photodiodes:
+            v = w.led_pos - w.photodiode_pos(i)
+            out.append(math.asin(max(-1.0, min(1.0, float(v @ h) / math.sqrt(float(v @ v))))))
+        return np.array(out)
+
+    def elevation_response(self) -> np.ndarray:
+        """The physical receiver's response at the elevation (its field of view is a
+        cone, the same Gaussian across the hinge as about it) [-]; the paper's bench
+        measures only about the hinge (1)."""
+        return np.array([receiver_response_at(e, self.constants.receiver)
+                         for e in self.elevation()])
 
     def incidence_rate(self, i: int) -> float:
         """d(phi_i)/dt [rad/s]: line-of-sight rotation minus photodiode rotation, about the

@@ -13,7 +13,10 @@ from dataclasses import dataclass
 import numpy as np
 
 from ..config import GRAVITY
-from .disturbance_base import Disturbance
+from .disturbance_base import Disturbance, DisturbanceError
+from .linear_waves import RegularWave
+from .scene import DEFAULT_DEPTH
+from .strips import HullStrips, StripCoefficients
 from .world import LinkWorld
 
 
@@ -67,22 +70,34 @@ class WaterCurrent(Disturbance):
 
 @dataclass
 class Waves(Disturbance):
-    """Surface waves: the wave-orbital velocity at the vehicle's depth (linear, deep
-    water), the ordinary sea state an AUV works in. A wave of height H and period T has
-    angular frequency w = 2 pi / T and wavenumber k = w^2 / g; at depth z its water
-    moves on circles of radius (H / 2) exp(-k z), so the velocity is
+    """Surface waves: linear (Airy) waves of height H and period T
+    (:mod:`ledsim.physics.linear_waves`), the ordinary sea state an AUV works in.
 
-        u = (H / 2) w exp(-k z) (cos(w t) along ``heading``, sin(w t) up)
+    Two models, by ``strips``:
 
-    The hull's drag turns it into sway (across the hull) and, through the fins aft of
-    its centre, yaw.
+    - ``strips`` >= 1 (a physical link's default, 12): strip theory
+      (:mod:`ledsim.physics.strips`). The hull is cut into slices, each feeling the
+      water's acceleration and velocity where it is, which decay with depth below the
+      surface and change along the hull: the waves surge, heave and pitch the hull (and
+      roll it from the side), and a current (``opt.wind``) acts alongside.
+    - ``strips=0`` (the paper's bench's default, so its numbers stay as they were): one
+      uniform medium velocity over the whole scene (``opt.wind``), deep water, the
+      orbital velocity at the vehicle's depth, u = (H / 2) w exp(-k z) (cos(w t) along
+      ``heading``, sin(w t) up). The hull's drag turns it into sway and yaw; it cannot
+      pitch the hull.
 
     Attributes:
         height: wave height H, crest to trough [m].
         period: wave period T [s].
-        heading: direction the waves travel in the horizontal plane [rad] (0 = +x).
-        depth: the vehicle's depth below the surface [m].
+        heading: direction the waves travel in the horizontal plane [rad] (0 = +x, the
+            link's direction from the receiver to the LED).
+        depth: the vehicle's depth below the still surface [m] (None: the run's
+            ``--depth``, 10 m by default).
         hold: 1 = the vehicle keeps station, 0 = it drifts with the water.
+        strips: slices of the hull for strip theory (0: the uniform medium velocity;
+            None: 12 on a physical link, 0 on the paper's bench).
+        sea_depth: the sea's depth under the still surface [m] (0: deep water); finite
+            depth changes the dispersion and the decay (cosh and sinh).
     """
 
     changes_model = True  # the medium velocity is a model option
@@ -90,18 +105,55 @@ class Waves(Disturbance):
     height: float = 1.0
     period: float = 8.0
     heading: float = math.pi / 2
-    depth: float = 10.0
+    depth: float | None = None
     hold: float = 1.0
+    strips: int | None = None
+    sea_depth: float = 0.0
+
+    def __post_init__(self):
+        if self.sea_depth and self.depth is not None and self.sea_depth <= self.depth:
+            raise DisturbanceError(f"waves.sea_depth={self.sea_depth:g} is not allowed: "
+                                   f"must be 0 (deep) or deeper than depth={self.depth:g} m")
+        self._strips: HullStrips | None = None
+
+    @property
+    def wave(self) -> RegularWave:
+        """The wave as linear theory's :class:`RegularWave`."""
+        return RegularWave(self.height, self.period, self.heading,
+                           self.sea_depth if self.sea_depth else math.inf)
 
     @property
     def amplitude(self) -> float:
-        """The orbital velocity's amplitude at the vehicle's depth [m/s]."""
+        """The orbital velocity's amplitude at the vehicle's depth [m/s] (deep water; at
+        the default depth when none is set)."""
         w = 2 * math.pi / self.period
-        return 0.5 * self.height * w * math.exp(-w * w / GRAVITY * self.depth)
+        depth = DEFAULT_DEPTH if self.depth is None else self.depth
+        return 0.5 * self.height * w * math.exp(-w * w / GRAVITY * depth)
+
+    def strips_in(self, world: LinkWorld) -> int:
+        """How many slices the waves use on ``world`` (``strips``, or its default)."""
+        if self.strips is not None:
+            return int(self.strips)
+        return 0 if world.config.constants.link is None else StripCoefficients().strips
 
     def apply(self, world: LinkWorld, t: float) -> None:
-        w = 2 * math.pi / self.period
-        a = self.amplitude
-        horizontal = a * math.cos(w * t)
-        world.set_current((horizontal * math.cos(self.heading),
-                           horizontal * math.sin(self.heading), a * math.sin(w * t)))
+        depth = world.config.depth if self.depth is None else self.depth
+        if self.sea_depth and self.sea_depth <= depth:
+            raise DisturbanceError(f"waves.sea_depth={self.sea_depth:g} is not allowed: "
+                                   f"must be 0 (deep) or deeper than the vehicle's "
+                                   f"{depth:g} m")
+        n = self.strips_in(world)
+        if n == 0:
+            w = 2 * math.pi / self.period
+            a = 0.5 * self.height * w * math.exp(-w * w / GRAVITY * depth)
+            horizontal = a * math.cos(w * t)
+            world.set_current((horizontal * math.cos(self.heading),
+                               horizontal * math.sin(self.heading), a * math.sin(w * t)))
+            return
+        if self._strips is None or self._strips.coefficients.strips != n:
+            self._strips = HullStrips(world.model, StripCoefficients(strips=n))
+        surface = float(world.initial_hull_pos[2]) + depth
+        flow, force, torque = self._strips.wrench(world.model, world.data, self.wave,
+                                                  surface, t, world.current)
+        world.set_wave_flow(flow)
+        world.add_hull_wrench(force, torque)

@@ -95,6 +95,11 @@ class LinkWorld(HullAccess):
         self.occluder_home = self.data.mocap_pos[self._occluder_mocap].copy()
         self.occluder_half_size = float(m.geom("occluder_plate").size[2])  # m
         self.transmitter_velocity = np.zeros(3)  # set by disturbances that move it
+        self._current, self._wave_flow = np.zeros(3), np.zeros(3)  # opt.wind's parts
+        #: The light around the receiver (:mod:`ledsim.physics.light`): a factor on each
+        #: photodiode's LED power and watts added to each sample (None: none).
+        self.light_gain: np.ndarray | None = None
+        self.light_noise: np.ndarray | None = None
         #: The DVL has bottom lock (a dropout disturbance takes it away for a while).
         self.dvl_bottom_lock = True
         self._ray_buffers: dict[int, tuple[np.ndarray, np.ndarray]] = {}
@@ -113,6 +118,8 @@ class LinkWorld(HullAccess):
         self.transmitter_velocity[:] = 0
         self.dvl_bottom_lock = True
         self.model.opt.wind[:] = 0
+        self._current, self._wave_flow = np.zeros(3), np.zeros(3)
+        self.light_gain = self.light_noise = None
         mujoco.mj_forward(self.model, self.data)
 
     def step(self, n: int | None = None) -> None:
@@ -228,8 +235,21 @@ class LinkWorld(HullAccess):
     # -- water and the other bodies --------------------------------------------------------
 
     def set_current(self, velocity) -> None:
-        """Velocity of the water [m/s] (MuJoCo's medium velocity, felt by fluid forces)."""
-        self.model.opt.wind[:] = velocity
+        """Velocity of the water [m/s] (MuJoCo's medium velocity, felt by fluid forces);
+        a wave's flow (:meth:`set_wave_flow`) adds to it."""
+        self._current = np.asarray(velocity, dtype=float)
+        self.model.opt.wind[:] = self._current + self._wave_flow
+
+    def set_wave_flow(self, velocity) -> None:
+        """The waves' water velocity at the hull [m/s], added to the current in MuJoCo's
+        medium velocity."""
+        self._wave_flow = np.asarray(velocity, dtype=float)
+        self.model.opt.wind[:] = self._current + self._wave_flow
+
+    @property
+    def current(self) -> np.ndarray:
+        """The current's velocity [m/s] (without the waves')."""
+        return self._current.copy()
 
     def set_transmitter(self, pos, velocity=(0.0, 0.0, 0.0), yaw: float | None = None) -> None:
         """Move the LED platform to ``pos`` [m], moving at ``velocity`` [m/s]; ``yaw``

@@ -38,3 +38,4 @@ class ExtendedKalmanFilter(GaussianFilter):
         F = self.system.f_jacobian(self.x, u)
         self.x = self.system.f(self.x, u)
         self.P = F @ self.P @ F.T + self.Q
+        self.contain()

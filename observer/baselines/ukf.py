@@ -74,3 +74,4 @@ class UnscentedKalmanFilter(GaussianFilter):
         self.x = self.Wm @ X
         dX = X - self.x
         self.P = (self.Wc * dX.T) @ dX + self.Q
+        self.contain()

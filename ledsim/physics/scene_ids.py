@@ -1,0 +1,105 @@
+"""MuJoCo ids and addresses of the scene's named parts, and the vehicle's sensors' and
+thrusters' names (:mod:`ledsim.physics.scene` builds the scene)."""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from typing import NamedTuple
+
+import numpy as np
+
+from ..config import LinkConstants
+from ..layout import ReceiverLayout
+
+
+@dataclass(frozen=True)
+class SceneIds:
+    """MuJoCo ids and addresses of the scene's named parts, read once when it compiles
+    (for code that works on MuJoCo's arrays directly: the world batch, the rollouts).
+
+    Attributes:
+        hull_body, gimbal_body: body ids of the AUV and of the receiver gimbal.
+        photodiode_sites: site ids of the layout's photodiodes, in its order; led_site:
+            the LED's site id.
+        hinge_qpos, hinge_dof: the gimbal axis's hinge's address in qpos and in qvel.
+        motor: actuator id of the gimbal axis's motor.
+        vehicle_sensors: sensordata addresses of the vehicle's sensors, in the order of
+            :data:`VEHICLE_SENSORS` (None: the scene lacks one of them).
+        thrusters: actuator ids of the hull's surge, sway, heave, pitch and yaw thrusters
+            (None: the scene lacks one of them).
+        magnetometer: sensordata address of the IMU's magnetometer, the heading
+            reference (None: the scene has none; the navigation then has no heading
+            reference).
+        usbl_site: site id of the USBL transceiver the acoustic fixes are measured from
+            (None: the scene has none; a fix's error then does not grow with range).
+        missing_sensors: names of :data:`VEHICLE_SENSORS` the scene lacks.
+    """
+
+    hull_body: int
+    gimbal_body: int
+    photodiode_sites: tuple[int, ...]
+    led_site: int
+    hinge_qpos: int
+    hinge_dof: int
+    motor: int
+    vehicle_sensors: tuple[int, ...] | None = None
+    thrusters: tuple[int, ...] | None = None
+    magnetometer: int | None = None
+    usbl_site: int | None = None
+    missing_sensors: tuple[str, ...] = ()
+
+    @classmethod
+    def of(cls, m, layout: ReceiverLayout | None = None) -> SceneIds:
+        """The ids of model ``m`` built for the receiver ``layout`` (None: the paper's)."""
+        layout = LinkConstants().layout if layout is None else layout
+        (axis,) = layout.validate().axes
+        hinge = m.joint(axis.joint)
+        sensors = [m.sensor(i).name for i in range(m.nsensor)]
+        missing = tuple(n for n in VEHICLE_SENSORS if n not in sensors)
+        adr = None if missing else tuple(int(m.sensor(n).adr[0]) for n in VEHICLE_SENSORS)
+        actuators = [m.actuator(i).name for i in range(m.nu)]
+        thrusters = (tuple(int(m.actuator(n).id) for n in THRUSTERS)
+                     if all(n in actuators for n in THRUSTERS) else None)
+        mag = int(m.sensor(MAGNETOMETER).adr[0]) if MAGNETOMETER in sensors else None
+        sites = [m.site(i).name for i in range(m.nsite)]
+        usbl = int(m.site("usbl").id) if "usbl" in sites else None
+        return cls(int(m.body("auv").id), int(m.body("gimbal").id),
+                   tuple(int(m.site(p.site).id) for p in layout.photodiodes),
+                   int(m.site("led").id), int(hinge.qposadr[0]), int(hinge.dofadr[0]),
+                   int(m.actuator(axis.motor).id), adr, thrusters, mag, usbl, missing)
+
+
+#: The vehicle's MuJoCo sensors by name: the IMU's gyro and accelerometer, the DVL (a
+#: velocimeter), the gimbal's encoder (jointpos) and the acoustic position fix (framepos).
+VEHICLE_SENSORS = ("imu_gyro", "imu_accel", "dvl_velocity", "gimbal_encoder",
+                   "acoustic_fix")
+#: The IMU's magnetometer, the navigation's heading reference (optional in a scene).
+MAGNETOMETER = "imu_magnetometer"
+
+
+#: The hull's thrusters by name: surge, sway and heave forces [N], pitch and yaw
+#: torques [N m].
+THRUSTERS = ("thruster_surge", "thruster_sway", "thruster_heave", "thruster_pitch",
+             "thruster_yaw")
+
+
+class VehicleMotion(NamedTuple):
+    """The noise-free values of the vehicle's sensors at one instant (SI units).
+
+    Attributes:
+        gyro: hull angular velocity in the IMU frame [rad/s], (3,).
+        accel: specific force in the IMU frame [m/s^2], (3,) (from the last physics step).
+        dvl: hull velocity at the DVL in its frame [m/s], (3,) (z points down).
+        encoder: the gimbal hinge angle [rad].
+        position: the IMU's position in the world frame [m], (3,).
+        magnetometer: the magnetic field in the IMU frame [T], (3,) (None: the scene
+            has no magnetometer).
+    """
+
+    gyro: np.ndarray
+    accel: np.ndarray
+    dvl: np.ndarray
+    encoder: float
+    position: np.ndarray
+    magnetometer: np.ndarray | None = None
+

@@ -1,0 +1,233 @@
+"""The real sea: linear waves against the textbook, strip forces on the hull, the depth
+of the vehicles, and the light around the receiver (flicker, scintillation)."""
+
+import math
+
+import numpy as np
+import pytest
+
+from ledsim.config import GRAVITY
+from ledsim.physics.disturbances import DisturbanceError, parse_disturbance
+from ledsim.physics.linear_waves import RegularWave, wavenumber
+from ledsim.physics.scene import WorldConfig, WorldError
+from ledsim.physics.tick import advance, prepare
+from ledsim.physics.world import LinkWorld
+from ledsim.radiometry.presets import link_constants
+
+
+def test_dispersion_relation_in_deep_and_finite_water():
+    T = 8.0
+    w = 2 * math.pi / T
+    assert wavenumber(T) == pytest.approx(w * w / GRAVITY, rel=1e-12)
+    for h in (2.0, 10.0, 50.0):
+        k = wavenumber(T, h)
+        assert GRAVITY * k * math.tanh(k * h) == pytest.approx(w * w, rel=1e-10)
+    # shallow water: the wave runs at sqrt(g h)
+    celerity = 2 * math.pi / 30.0 / wavenumber(30.0, 1.0)
+    assert celerity == pytest.approx(math.sqrt(GRAVITY * 1.0), rel=0.01)
+
+
+@pytest.mark.parametrize("h", [math.inf, 15.0])
+def test_orbital_velocity_amplitude_and_decay_match_linear_theory(h):
+    """Dean and Dalrymple's formulas, sampled over a period at several depths."""
+    H, T = 1.5, 6.0
+    wave = RegularWave(H, T, heading=0.3, water_depth=h)
+    w, k = 2 * math.pi / T, wave.k
+    t = np.linspace(0, T, 400, endpoint=False)
+    for s in (0.0, 3.0, 10.0):
+        pairs = [wave.kinematics(np.array([2.0, -1.0, -s]), s, ti) for ti in t]
+        vel, acc = np.stack([p[0] for p in pairs]), np.stack([p[1] for p in pairs])
+        if math.isinf(h):
+            horizontal = vertical = 0.5 * H * w * math.exp(-k * s)
+        else:
+            horizontal = 0.5 * H * w * math.cosh(k * (h - s)) / math.sinh(k * h)
+            vertical = 0.5 * H * w * math.sinh(k * (h - s)) / math.sinh(k * h)
+        along = vel[:, 0] * math.cos(0.3) + vel[:, 1] * math.sin(0.3)
+        assert np.abs(along).max() == pytest.approx(horizontal, rel=1e-3)
+        assert np.abs(vel[:, 2]).max() == pytest.approx(vertical, rel=1e-3)
+        across = -vel[:, 0] * math.sin(0.3) + vel[:, 1] * math.cos(0.3)
+        assert np.abs(across).max() < 1e-12
+        # the acceleration is the velocity's time derivative
+        dv = np.gradient(vel[:, 2], t)
+        assert np.abs(dv - acc[:, 2]).max() < 2e-3 * vertical * w
+    surface = wave.elevation(np.array([[0.0, 0.0, 0.0]]), 0.0)
+    assert surface[0] == pytest.approx(0.5 * H)
+
+
+def _free_hull(heading: float, T: float = 8.0, depth: float = 5.0, seconds: float = 40.0):
+    c = link_constants("luma", 30.0)
+    world = LinkWorld(WorldConfig(constants=c, depth=depth))
+    waves = parse_disturbance(f"waves:height=1,period={T:g},heading={heading},hold=0")
+    n = int(seconds / c.Te)
+    pos, pitch = np.empty((n, 3)), np.empty(n)
+    prepare(world, [waves], 0.0)
+    for k in range(n):
+        advance(world, [waves], 0.0, (k + 1) * c.Te)
+        pos[k] = world.hull_pos
+        pitch[k] = -math.asin(world.hull_rotation[2, 0])
+    t = np.arange(1, n + 1) * c.Te
+    w = 2 * math.pi / T
+    design = np.stack([np.cos(w * t), np.sin(w * t), np.ones_like(t), t], axis=1)[n // 3:]
+
+    def amplitude(y):
+        coef, *_ = np.linalg.lstsq(design, y[n // 3:], rcond=None)
+        return math.hypot(coef[0], coef[1])
+
+    orbit = 0.5 * math.exp(-w * w / GRAVITY * depth)
+    return [amplitude(pos[:, i]) / orbit for i in range(3)], amplitude(pitch)
+
+
+def test_a_free_neutrally_buoyant_hull_follows_the_water_in_a_long_wave():
+    """A body much smaller than the wave, as heavy as its water, moves with it: its
+    surge and heave follow the orbit (a strip model that lost the depth decay, the
+    inertia force or the drag's flow would not)."""
+    (surge, sway, heave), pitch = _free_hull(0.0)
+    assert 0.8 < surge < 1.1 and 0.8 < heave < 1.1
+    assert sway < 0.02
+    (surge, sway, heave), _ = _free_hull(math.pi / 2)
+    assert 0.8 < sway < 1.1 and 0.8 < heave < 1.1 and surge < 0.05
+
+
+def test_the_bench_keeps_its_uniform_wave_flow_and_a_physical_link_gets_strips():
+    waves = parse_disturbance("waves:height=1,period=6")
+    bench = LinkWorld(WorldConfig())
+    assert waves.strips_in(bench) == 0
+    physical = LinkWorld(WorldConfig(constants=link_constants("luma", 30.0)))
+    assert waves.strips_in(physical) == 12
+    assert parse_disturbance("waves:strips=0").strips_in(physical) == 0
+
+
+@pytest.mark.parametrize("text", ["waves:strips=-1", "waves:strips=65", "waves:strips=1.5",
+                                  "waves:sea_depth=-1", "waves:depth=10,sea_depth=5"])
+def test_bad_wave_keys_are_refused(text):
+    with pytest.raises(DisturbanceError):
+        parse_disturbance(text)
+
+
+def test_depths_place_the_led_above_the_receiver_at_the_same_slant_distance():
+    c = link_constants("luma", 20.0)
+    world = LinkWorld(WorldConfig(constants=c, depth=10.0, transmitter_depth=7.0))
+    rise = world.led_pos - world.photodiode_pos(0)
+    assert np.linalg.norm(rise) == pytest.approx(20.0, abs=0.01)
+    assert rise[2] == pytest.approx(3.0, abs=0.01)
+    with pytest.raises(WorldError, match="transmitter_depth"):
+        LinkWorld(WorldConfig(constants=c, depth=10.0, transmitter_depth=40.0))
+    with pytest.raises(Exception, match="depth"):
+        WorldConfig(constants=c, depth=0.2)
+
+
+def test_scintillation_fades_the_power_log_normally_with_its_index():
+    from ledsim.physics.light import Scintillation, window_share
+
+    world = LinkWorld(WorldConfig(constants=link_constants("luma", 30.0)))
+    fade = Scintillation(index=0.3, time=0.05, correlation=0.5, seed=3)
+    Te = world.config.constants.Te
+    gains = []
+    for k in range(40_000):
+        fade.apply(world, k * Te)
+        gains.append(world.light_gain.copy())
+    g = np.array(gains)
+    share = window_share(0.05, Te)
+    assert g.mean() == pytest.approx(1.0, abs=0.02)
+    assert g.var() / g.mean() ** 2 == pytest.approx(0.3 * share, rel=0.1)
+    logs = np.log(g)
+    assert np.corrcoef(logs[:, 0], logs[:, 1])[0, 1] == pytest.approx(0.5, abs=0.05)
+    assert np.corrcoef(logs[1:, 0], logs[:-1, 0])[0, 1] == pytest.approx(
+        math.exp(-Te / 0.05), abs=0.03)
+
+
+def test_flicker_adds_daylight_shot_noise_that_falls_with_depth():
+    from ledsim.physics.light import SunlightFlicker
+
+    var, background = {}, {}
+    for depth in (3.0, 20.0):
+        world = LinkWorld(WorldConfig(constants=link_constants("luma", 30.0), depth=depth))
+        flicker = SunlightFlicker(seed=1, contrast=0.3)
+        noise = []
+        for k in range(20_000):
+            flicker.apply(world, k * 0.01)
+            noise.append(world.light_noise.copy())
+        var[depth], background[depth] = float(np.var(noise)), flicker.background_power
+    # the shot noise's variance follows the daylight, which Kirk's K_d dims with depth
+    assert background[3.0] > background[20.0] > 0
+    assert var[3.0] / var[20.0] == pytest.approx(background[3.0] / background[20.0], rel=0.15)
+    with pytest.raises(DisturbanceError, match="physical link"):
+        SunlightFlicker().apply(LinkWorld(WorldConfig()), 0.0)
+
+
+@pytest.mark.parametrize("text", ["scintillation:index=0", "scintillation:index=2",
+                                  "scintillation:time=0", "scintillation:correlation=1.5",
+                                  "flicker:irradiance=-1", "flicker:contrast=9",
+                                  "flicker:frequency=0"])
+def test_bad_light_keys_are_refused(text):
+    with pytest.raises(DisturbanceError):
+        parse_disturbance(text)
+
+
+def test_a_fade_is_not_a_pointing_loss():
+    """The oracle points perfectly: fades leave its availability as it was."""
+    from ledsim.loop.config import RunConfig
+    from ledsim.loop.report import run_many
+
+    def availability(*disturbances):
+        cfg = RunConfig(estimator="oracle", link="luma", seconds=3.0,
+                        disturbances=disturbances)
+        return run_many(cfg, progress=False)[0].availability.mean
+
+    assert availability("scintillation:index=0.5") == pytest.approx(availability(), abs=0.01)
+
+
+@pytest.mark.parametrize("distance", [8.0, 30.0, 60.0])
+def test_the_overview_camera_sees_both_vehicles_under_the_surface(distance):
+    """Both ends of the link project inside the overview camera's frame, and the camera
+    is under the surface (a physical link's scene scales with its distance)."""
+    import mujoco
+
+    depth = 3.0
+    world = LinkWorld(WorldConfig(constants=link_constants("luma", distance), depth=depth))
+    m, d = world.model, world.data
+    mujoco.mj_forward(m, d)
+    cam = m.camera("overview").id
+    pos, R = d.cam_xpos[cam], d.cam_xmat[cam].reshape(3, 3)
+    tan_y = math.tan(math.radians(m.cam_fovy[cam]) / 2)
+    tan_x = tan_y * 640 / 480
+    for point in (world.hull_pos, world.led_pos):
+        local = R.T @ (point - pos)  # MuJoCo cameras look along -z
+        assert local[2] < 0
+        assert abs(local[0] / -local[2]) < tan_x and abs(local[1] / -local[2]) < tan_y
+    assert pos[2] < world.initial_hull_pos[2] + depth
+    assert m.vis.map.fogend == pytest.approx(
+        3.0 / world.config.constants.link.water_at_led.attenuation)
+    # the occluder grows with the link, and the bench keeps its own scene
+    assert m.geom("occluder_plate").size[1] >= 0.01 * distance
+    bench = LinkWorld(WorldConfig()).model
+    assert bench.geom("occluder_plate").size[1] == pytest.approx(0.03)
+    assert bench.vis.map.fogend == pytest.approx(7.0)
+
+
+def test_a_frame_of_the_sea_draws_the_surface_and_the_beam():
+    from ledsim.physics.render import FrameRecorder
+    from ledsim.physics.sea_render import CONE_SLICES, SURFACE_TILES
+    from ledsim.physics.sensor import IrradianceSensor
+
+    world = LinkWorld(WorldConfig(constants=link_constants("luma", 20.0), depth=3.0))
+    waves = parse_disturbance("waves:height=1.5,period=6,heading=0")
+    rec = FrameRecorder(world, 320, 240, 10.0, "overview", waves=[waves.wave])
+    try:
+        reading = IrradianceSensor(world).read()
+        frame = rec.render(0.5, reading)
+        assert rec.renderer.scene.ngeom >= SURFACE_TILES**2 + CONE_SLICES
+        assert frame.shape == (240, 320, 3) and frame.std() > 5
+    finally:
+        rec.close()
+
+
+def test_the_receiver_dome_takes_the_head_out_of_the_flow():
+    c = link_constants("luma", 30.0)
+    open_head = LinkWorld(WorldConfig(constants=c)).model
+    dome = LinkWorld(WorldConfig(constants=c, receiver_dome=True)).model
+    g = open_head.geom("gimbal_housing").id
+    assert open_head.geom_fluid[g, 0] > 0 and dome.geom_fluid[g, 0] == 0
+    # the hinge's inertia is the same: only the water's torque goes
+    assert dome.body_mass[dome.body("gimbal").id] == open_head.body_mass[
+        open_head.body("gimbal").id]
