@@ -103,6 +103,37 @@ def one(job) -> dict:
             "elevation_db": el_loss}
 
 
+def _kind(case: str) -> str:
+    if case.endswith(", dome"):
+        return "beam seas, head in a dome"
+    if not case.startswith("waves"):
+        return "flicker, scintillation"
+    return "beam seas (pi/2)" if "from pi/2" in case else "head and following seas (0, pi)"
+
+
+def summary_lines(groups: dict) -> list[str]:
+    """Per kind of row, estimator and IMU: the rows at 0.95 of the oracle's
+    availability or more, and the worst ratio; the largest elevation loss."""
+    ratios: dict = {}
+    for (case, d, est, imu), rs in groups.items():
+        if est == "oracle":
+            continue
+        oracle = np.mean([r["availability"] for r in groups[(case, d, "oracle", imu)]])
+        ratio = np.mean([r["availability"] for r in rs]) / oracle if oracle > 0 else np.nan
+        ratios.setdefault((_kind(case), est, imu), []).append(float(ratio))
+    out = ["", "## Summary", "", "Rows where the estimator keeps at least 0.95 of the "
+           "oracle's availability on the same gimbal, and the worst ratio.", "",
+           "| rows | estimator | IMU | at 0.95 or more | worst |", "|---|---|---|---|---|"]
+    for (kind, est, imu), v in sorted(ratios.items(), key=lambda kv: (
+            kv[0][0], ESTIMATORS.index(kv[0][1]), not kv[0][2])):
+        out.append(f"| {kind} | {est} | {'yes' if imu else 'no'} | "
+                   f"{sum(x >= 0.95 for x in v)} of {len(v)} | {min(v):.3f} |")
+    worst = max(r["elevation_db"] for rs in groups.values() for r in rs)
+    out += ["", f"The largest elevation loss in any row is {worst:.3f} dB: what the one-axis "
+            "gimbal cannot turn to is small beside the azimuth's."]
+    return out
+
+
 def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__,
                                  formatter_class=argparse.RawDescriptionHelpFormatter)
@@ -112,6 +143,9 @@ def main() -> None:
     ap.add_argument("--link", default="luma")
     ap.add_argument("--quick", action="store_true",
                     help="one height (1.5 m), period (6 s) and depth (3 m)")
+    ap.add_argument("--from-json", metavar="FILE",
+                    help="write the tables from a finished run's out/sea/results.json "
+                    "instead of running (same flags as that run)")
     args = ap.parse_args()
     from tqdm.auto import tqdm
 
@@ -126,11 +160,16 @@ def main() -> None:
              args.seconds, args.link)
             for label, depth, share, dist, dome in cases(args.quick) for est in ESTIMATORS
             for imu in (True, False) for seed in range(args.seeds)]
-    with ProcessPoolExecutor(args.workers) as pool:
-        rows = list(tqdm(pool.map(one, jobs), total=len(jobs), desc="sea table"))
     out = ROOT / "out" / "sea"
-    out.mkdir(parents=True, exist_ok=True)
-    write_json(out / "results.json", rows)
+    if args.from_json:  # the tables again from a finished run's rows
+        import json
+
+        rows = json.loads(Path(args.from_json).read_text())
+    else:
+        with ProcessPoolExecutor(args.workers) as pool:
+            rows = list(tqdm(pool.map(one, jobs), total=len(jobs), desc="sea table"))
+        out.mkdir(parents=True, exist_ok=True)
+        write_json(out / "results.json", rows)
     keys = ("availability", "fec_share", "pointing_loss_db", "silent", "pitch_deg",
             "heave_m", "azimuth_db", "elevation_db")
     groups: dict = {}
@@ -176,6 +215,7 @@ def main() -> None:
         met = ratio >= 0.95 and (not light or (kl - ol <= 0.3 and ks <= 0.01))
         lines.append(f"| {case} | {d:g} | {'yes' if imu else 'no'} | {ratio:.3f} | "
                      f"{kl - ol:+.3f} | {ks:.3f} | {'yes' if met else 'no'} |")
+    lines += summary_lines(groups)
     atomic_write_text(ROOT / "docs" / "sea_table.md", "\n".join(lines) + "\n")
     print("\n".join(lines))
 

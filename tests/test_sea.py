@@ -10,7 +10,6 @@ from ledsim.config import GRAVITY
 from ledsim.physics.disturbances import DisturbanceError, parse_disturbance
 from ledsim.physics.linear_waves import RegularWave, wavenumber
 from ledsim.physics.scene import WorldConfig, WorldError
-from ledsim.physics.tick import advance, prepare
 from ledsim.physics.world import LinkWorld
 from ledsim.radiometry.presets import link_constants
 
@@ -54,38 +53,17 @@ def test_orbital_velocity_amplitude_and_decay_match_linear_theory(h):
     assert surface[0] == pytest.approx(0.5 * H)
 
 
-def _free_hull(heading: float, T: float = 8.0, depth: float = 5.0, seconds: float = 40.0):
-    c = link_constants("luma", 30.0)
-    world = LinkWorld(WorldConfig(constants=c, depth=depth))
-    waves = parse_disturbance(f"waves:height=1,period={T:g},heading={heading},hold=0")
-    n = int(seconds / c.Te)
-    pos, pitch = np.empty((n, 3)), np.empty(n)
-    prepare(world, [waves], 0.0)
-    for k in range(n):
-        advance(world, [waves], 0.0, (k + 1) * c.Te)
-        pos[k] = world.hull_pos
-        pitch[k] = -math.asin(world.hull_rotation[2, 0])
-    t = np.arange(1, n + 1) * c.Te
-    w = 2 * math.pi / T
-    design = np.stack([np.cos(w * t), np.sin(w * t), np.ones_like(t), t], axis=1)[n // 3:]
-
-    def amplitude(y):
-        coef, *_ = np.linalg.lstsq(design, y[n // 3:], rcond=None)
-        return math.hypot(coef[0], coef[1])
-
-    orbit = 0.5 * math.exp(-w * w / GRAVITY * depth)
-    return [amplitude(pos[:, i]) / orbit for i in range(3)], amplitude(pitch)
-
-
 def test_a_free_neutrally_buoyant_hull_follows_the_water_in_a_long_wave():
     """A body much smaller than the wave, as heavy as its water, moves with it: its
     surge and heave follow the orbit (a strip model that lost the depth decay, the
     inertia force or the drag's flow would not)."""
-    (surge, sway, heave), pitch = _free_hull(0.0)
-    assert 0.8 < surge < 1.1 and 0.8 < heave < 1.1
-    assert sway < 0.02
-    (surge, sway, heave), _ = _free_hull(math.pi / 2)
-    assert 0.8 < sway < 1.1 and 0.8 < heave < 1.1 and surge < 0.05
+    from ledsim.physics.wave_response import free_hull_response
+
+    ahead = free_hull_response(8.0, 5.0, 0.0, seconds=40.0)
+    assert 0.8 < ahead.surge < 1.1 and 0.8 < ahead.heave < 1.1 and ahead.sway < 0.02
+    assert 0.2 * ahead.slope < ahead.pitch < 2 * ahead.slope  # of the wave's slope
+    beam = free_hull_response(8.0, 5.0, math.pi / 2, seconds=40.0)
+    assert 0.8 < beam.sway < 1.1 and 0.8 < beam.heave < 1.1 and beam.surge < 0.05
 
 
 def test_the_bench_keeps_its_uniform_wave_flow_and_a_physical_link_gets_strips():
@@ -231,3 +209,16 @@ def test_the_receiver_dome_takes_the_head_out_of_the_flow():
     # the hinge's inertia is the same: only the water's torque goes
     assert dome.body_mass[dome.body("gimbal").id] == open_head.body_mass[
         open_head.body("gimbal").id]
+
+
+def test_the_run_reports_its_depths():
+    from ledsim.loop.config import RunConfig
+    from ledsim.loop.report import run_many
+    from ledsim.results import to_jsonable
+
+    cfg = RunConfig(estimator="ekf", link="luma", seconds=1.0, seeds=1, depth=3.0,
+                    transmitter_depth=2.5, receiver_dome=True)
+    cfg.validate()
+    summary = to_jsonable(run_many(cfg, progress=False)[0])
+    assert (summary["depth"], summary["transmitter_depth"], summary["receiver_dome"]) == \
+        (3.0, 2.5, True)

@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+import numpy as np
+
 from ..errors import LedsimError
 from .world import LinkWorld
 
@@ -28,3 +30,30 @@ class Disturbance:
         """Time [s] at which a transient event (an occlusion) ends, after which the loop
         should recover; None for disturbances that last the whole run."""
         return None
+
+
+class SeededDisturbance(Disturbance):
+    """A disturbance with random parts: its own generator, reseeded by :meth:`reset`
+    (and at construction, from its ``seed`` field), and the time since its last
+    :meth:`apply` (:meth:`elapsed`). Subclasses clear their own state in
+    :meth:`restart`."""
+
+    seed: int
+
+    def __post_init__(self):
+        self.reset(self.seed)
+
+    def reset(self, seed: int) -> None:
+        self.seed = seed
+        self._rng = np.random.default_rng(seed)
+        self._last_t = None
+        self.restart()
+
+    def restart(self) -> None:
+        """Clear the subclass's own state at the start of a run."""
+
+    def elapsed(self, t: float) -> float | None:
+        """Time since the last call [s] (None at the first), and remember ``t``."""
+        dt = None if self._last_t is None else t - self._last_t
+        self._last_t = t
+        return dt

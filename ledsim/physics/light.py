@@ -16,7 +16,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from .disturbance_base import Disturbance, DisturbanceError
+from .disturbance_base import DisturbanceError, SeededDisturbance
 from .world import LinkWorld
 
 
@@ -35,7 +35,7 @@ def window_share(time: float, window: float) -> float:
 
 
 @dataclass
-class SunlightFlicker(Disturbance):
+class SunlightFlicker(SeededDisturbance):
     """Daylight on the receiver, focused by the surface's waves into flicker.
 
     Sunlight reaches the detector through its filter and field of view as the link's
@@ -66,14 +66,8 @@ class SunlightFlicker(Disturbance):
     frequency: float | None = None
     seed: int = 0
 
-    def __post_init__(self):
-        self.reset(self.seed)
-
-    def reset(self, seed: int) -> None:
-        self.seed = seed
-        self._rng = np.random.default_rng(seed)
+    def restart(self) -> None:
         self._z = 0j
-        self._last_t = None
         self._terms = None
 
     def contrast_at(self, depth: float) -> float:
@@ -109,12 +103,12 @@ class SunlightFlicker(Disturbance):
         # a complex Ornstein-Uhlenbeck envelope (unit variance, correlation time 1 / f)
         # turning at f: narrow-band around f
         kick = complex(*self._rng.standard_normal(2)) * math.sqrt(0.5)
-        if self._last_t is None:
+        dt = self.elapsed(t)
+        if dt is None:
             self._z = kick
-        elif t > self._last_t:
-            a = math.exp(-(t - self._last_t) * f)
+        elif dt > 0:
+            a = math.exp(-dt * f)
             self._z = a * self._z + math.sqrt(1 - a * a) * kick
-        self._last_t = t
         phase = 2 * math.pi * f * t
         x = math.sqrt(2) * (self._z * complex(math.cos(phase), math.sin(phase))).real
         flicker = math.exp(sigma * x - 0.5 * sigma * sigma)  # F(t): mean 1
@@ -124,7 +118,7 @@ class SunlightFlicker(Disturbance):
 
 
 @dataclass
-class Scintillation(Disturbance):
+class Scintillation(SeededDisturbance):
     """Log-normal fading of the LED's light: turbulence (temperature and salinity
     microstructure) or bubbles between the LED and the receiver.
 
@@ -150,24 +144,18 @@ class Scintillation(Disturbance):
     correlation: float = 0.99
     seed: int = 0
 
-    def __post_init__(self):
-        self.reset(self.seed)
-
-    def reset(self, seed: int) -> None:
-        self.seed = seed
-        self._rng = np.random.default_rng(seed)
+    def restart(self) -> None:
         self._x = None
-        self._last_t = None
 
     def apply(self, world: LinkWorld, t: float) -> None:
         Te = world.config.constants.Te
         s2 = math.log1p(self.index * window_share(self.time, Te))
         n = len(world.ids.photodiode_sites)
+        dt = self.elapsed(t)
         if self._x is None:
             self._x = _pair(self._rng, n, self.correlation)
-        elif self._last_t is not None and t > self._last_t:
-            rho = math.exp(-(t - self._last_t) / self.time)
+        elif dt is not None and dt > 0:
+            rho = math.exp(-dt / self.time)
             self._x = rho * self._x + math.sqrt(1 - rho * rho) * _pair(
                 self._rng, n, self.correlation)
-        self._last_t = t
         world.light_gain = np.exp(math.sqrt(s2) * self._x - 0.5 * s2)

@@ -31,7 +31,7 @@ def apply_sea(spec: mujoco.MjSpec, attenuation: float, receiver: np.ndarray,
               led: np.ndarray, depth: float) -> None:
     """Edit ``spec`` for a link from ``receiver`` to ``led`` (world positions [m]) in
     water of beam attenuation ``attenuation`` [1/m], the receiver ``depth`` [m] below
-    the surface (the overview camera stays under it)."""
+    the surface (the overview camera stays under it, half way up)."""
     distance = float(np.linalg.norm(led - receiver))
     mid = 0.5 * (receiver + led)
     # The fog: linear in MuJoCo, from the receiver's eye to where the contrast is 5 %.
@@ -44,7 +44,7 @@ def apply_sea(spec: mujoco.MjSpec, attenuation: float, receiver: np.ndarray,
     # near as the whole link allows; in turbid water the fog hides them, as it would)
     cam = spec.camera("overview")
     eye = mid + np.array([0.0, -0.5 * distance - 1.5, 0.12 * distance + 0.6])
-    eye[2] = min(eye[2], receiver[2] + depth - 0.5)
+    eye[2] = min(eye[2], receiver[2] + 0.5 * depth)  # under a wave's trough too
     cam.pos = eye.tolist()
     cam.alt.type = mujoco.mjtOrientation.mjORIENTATION_XYAXES
     cam.alt.xyaxes = _look_at(eye, mid)

@@ -13,7 +13,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from ..config import GRAVITY
-from .disturbance_base import Disturbance, DisturbanceError
+from .disturbance_base import Disturbance, DisturbanceError, SeededDisturbance
 from .linear_waves import RegularWave
 from .scene import DEFAULT_DEPTH
 from .strips import HullStrips, StripCoefficients
@@ -21,7 +21,7 @@ from .world import LinkWorld
 
 
 @dataclass
-class WaterCurrent(Disturbance):
+class WaterCurrent(SeededDisturbance):
     """Water current through MuJoCo's medium velocity (``opt.wind``).
 
     A free-floating AUV would simply drift away with the water (0.3 m/s is 3 m in 10 s,
@@ -48,18 +48,11 @@ class WaterCurrent(Disturbance):
     hold: float = 1.0
     seed: int = 0
 
-    def __post_init__(self):
-        self.reset(self.seed)
-
-    def reset(self, seed: int) -> None:
-        self.seed = seed
-        self._rng = np.random.default_rng(seed)
+    def restart(self) -> None:
         self._g = np.zeros(3)
-        self._last_t = None
 
     def apply(self, world: LinkWorld, t: float) -> None:
-        dt = 0.0 if self._last_t is None else t - self._last_t
-        self._last_t = t
+        dt = self.elapsed(t) or 0.0
         if dt > 0 and self.gust > 0:
             a = math.exp(-dt / self.gust_time)
             self._g = a * self._g + self.gust * math.sqrt(1 - a * a) * \
