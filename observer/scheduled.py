@@ -202,8 +202,9 @@ class ScheduledKKL(Estimator):
         driven = 0.0
         if sch.driven is not None:  # nor while the motor works against a load
             Te = self.system.Te
-            self._drive += min(Te / sch.driven_time, 1.0) * (
-                float(np.max(np.abs(np.asarray(u, dtype=float) - self.u_bar))) - self._drive)
+            du = abs(u - self.u_bar) if isinstance(u, float | int) else \
+                float(np.max(np.abs(np.asarray(u, dtype=float) - self.u_bar)))
+            self._drive += min(Te / sch.driven_time, 1.0) * (du - self._drive)
             if self._drive > sch.driven:
                 driven = self.clip(sch.driven_gain * sch.recover_gain(self.noise))
                 self.k = min(self.k, int(round(sch.time_of(driven, self.noise) / Te)))
