@@ -60,6 +60,7 @@ def one(job) -> dict:
     import os
 
     os.environ.setdefault("MUJOCO_GL", "osmesa")
+    from ledsim.control import receiver_peak
     from ledsim.loop.closed_loop import run_once
     from ledsim.loop.config import RunConfig
     from ledsim.optics import receiver_response_at
@@ -75,18 +76,14 @@ def one(job) -> dict:
         R = w.hull_rotation
         rec["pitch"].append(-math.asin(max(-1.0, min(1.0, float(R[2, 0])))))
         rec["heave"].append(float(w.hull_pos[2]))
-        sensor = run.sensor.sensors[0] if hasattr(run.sensor, "sensors") else run.sensor
         ref = w.config.constants.layout.reference
-        rec["elevation"].append(float(sensor.elevation()[ref]))
-        rec["azimuth"].append(float(run.reading.incidence_angle[0][ref]
-                                    if np.ndim(run.reading.incidence_angle) == 2
-                                    else run.reading.incidence_angle[ref]))
+        rec["elevation"].append(float(run.sensor.elevation()[ref]))
+        rec["azimuth"].append(float(run.reading.incidence_angle[ref]))
 
     out = run_once(cfg, seed, on_step=on_step)
     c = cfg.world_config().constants
     k0 = int(round(cfg.steady_from / c.Te))
-    r = c.receiver
-    peak = max(receiver_response_at(p, r) for p in np.linspace(-0.3, 0.3, 601))
+    r, peak = c.receiver, receiver_peak(c)
     az = np.array(rec["azimuth"][k0:])
     el = np.array(rec["elevation"][k0:])
     az_loss = float(np.mean([-10 * math.log10(max(receiver_response_at(a, r) / peak, 1e-12))

@@ -9,6 +9,7 @@ from ..config import PAPER_DISTANCE, LinkConstants, NavigationNoise
 from ..errors import LedsimError
 from ..keyvalues import settings_of
 from ..physics.disturbances import check_timing, parse_disturbance
+from ..physics.scene import transmitter_rise
 from ..physics.vehicle import StationKeeping
 from ..radiometry.presets import LINK_PRESETS
 from ..radiometry.water import WATER_TYPES
@@ -98,20 +99,19 @@ def validate_run(cfg) -> None:
         checks.append(("--bit-rate", cfg.bit_rate, 0 < cfg.bit_rate <= 1e10,
                        "in (0, 1e10] bit/s"))
     checks.append(("--depth", cfg.depth, 1.0 <= cfg.depth <= 500.0, "in [1, 500] m"))
-    if cfg.transmitter_depth is not None and \
-            abs(cfg.depth - cfg.transmitter_depth) >= cfg.distance:
-        raise LedsimError(f"--transmitter-depth {cfg.transmitter_depth:g} is not allowed "
-                          f"with --depth {cfg.depth:g}: the depths must differ by less "
-                          f"than the link distance {cfg.distance:g} m")
-    if cfg.link == "paper" and any(d.split(":")[0] == "flicker" for d in cfg.disturbances):
-        raise LedsimError("flicker needs a physical link's receiver (--link luma, "
-                          "aquaoptical or bluecomm-200): the paper's bench has none")
     if cfg.transmitter_depth is not None:
         checks.append(("--transmitter-depth", cfg.transmitter_depth,
                        0.2 <= cfg.transmitter_depth <= 500.0, "in [0.2, 500] m"))
     for flag, value, ok, allowed in checks:
         if not (ok and math.isfinite(value)):
             raise LedsimError(f"{flag} {value!r} is not allowed: must be {allowed}")
-    check_timing([parse_disturbance(d) for d in cfg.disturbances], cfg.run_seconds)
+    transmitter_rise(cfg.depth, cfg.transmitter_depth, cfg.distance,
+                     ("--depth", "--transmitter-depth"))
+    disturbances = [parse_disturbance(d) for d in cfg.disturbances]
+    if cfg.link == "paper":
+        for d in disturbances:
+            if getattr(d, "needs_receiver", False):
+                raise LedsimError(d.NO_RECEIVER)
+    check_timing(disturbances, cfg.run_seconds)
     navigation_noise(cfg.imu_noise)
     keeping_gains(cfg.station_keeping_gains)

@@ -120,11 +120,8 @@ class BatchSensor:
             vis[n, i] = s.visible_fraction(int(i), s.aperture_points())
         clean = received_power(transmitter_gain(dist, theta, c), phi, c.receiver, vis)
         if c.link is not None:  # a real receiver's cone: the elevation costs power too
-            r = c.receiver
-            elevation = np.arcsin(np.minimum(np.abs(dot3(u, hinge)), 1.0))
-            clean = clean * (r.a1 * np.exp(-np.square(elevation / r.c1))
-                             if r.b1 == 0.0 and r.a2 == 0.0  # a centred Gaussian: its cone
-                             else receiver_response(elevation, r))
+            sine = np.maximum(np.minimum(dot3(u, hinge), 1.0), -1.0)  # np.clip: 2x slower
+            clean = clean * receiver_response(np.arcsin(sine), c.receiver)
         return clean, phi, theta, dist, vis, rays
 
     def read(self) -> BatchReading:

@@ -80,11 +80,15 @@ class SunlightFlicker(SeededDisturbance):
             return self.frequency
         return 0.5 + 2.0 * math.exp(-depth / 5.0)
 
+    #: It needs a physical link's detector (the run's validation asks before any work).
+    needs_receiver = True
+    NO_RECEIVER = ("flicker needs a physical link's receiver (--link luma, aquaoptical or "
+                   "bluecomm-200): the paper's bench has none")
+
     def _setup(self, world: LinkWorld):
         link = world.config.constants.link
         if link is None:
-            raise DisturbanceError("flicker needs a physical link's receiver (--link luma, "
-                                   "aquaoptical or bluecomm-200): the paper's bench has none")
+            raise DisturbanceError(self.NO_RECEIVER)
         depth = world.config.depth
         lit = dataclasses.replace(link, depth=depth, surface_irradiance=self.irradiance)
         bandwidth = 1.0 / (2.0 * world.config.constants.Te)

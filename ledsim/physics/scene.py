@@ -151,6 +151,20 @@ def _set_yaw(element, angle: float) -> None:
     element.quat = [math.cos(angle / 2), 0.0, 0.0, math.sin(angle / 2)]
 
 
+def transmitter_rise(depth: float, transmitter_depth: float | None, distance: float,
+                     names: tuple[str, str] = ("depth", "transmitter_depth")) -> float:
+    """How far the LED stands above the receiver [m] (``transmitter_depth`` None: level),
+    refusing depths that differ by the link ``distance`` or more (``names``: what the
+    message calls the two depths)."""
+    if transmitter_depth is None:
+        return 0.0
+    if abs(depth - transmitter_depth) >= distance:
+        raise WorldError(f"{names[1]} {transmitter_depth:g} m is not allowed with "
+                         f"{names[0]} {depth:g} m: the depths must differ by less than the "
+                         f"link distance {distance:g} m")
+    return depth - transmitter_depth
+
+
 def build_spec(config: WorldConfig) -> mujoco.MjSpec:
     """Load the scene and apply ``config`` through MjSpec (no XML templating)."""
     path = Path(config.xml)
@@ -196,11 +210,7 @@ def build_spec(config: WorldConfig) -> mujoco.MjSpec:
     centre = np.asarray(gimbal.pos) + centre_local
     tx = spec.body("transmitter")
     # the LED's depth lifts it out of the receiver's plane; d stays the slant distance
-    rise = 0.0 if config.transmitter_depth is None else config.depth - config.transmitter_depth
-    if abs(rise) >= c.distance:
-        raise WorldError(f"transmitter_depth={config.transmitter_depth:g} m is not allowed "
-                         f"with depth={config.depth:g} m: the depths must differ by less "
-                         f"than the link distance {c.distance:g} m")
+    rise = transmitter_rise(config.depth, config.transmitter_depth, c.distance)
     ahead = math.sqrt(c.distance**2 - rise**2)
     tx.pos = [centre[0] + ahead, centre[1] + config.led_lateral_offset, centre[2] + rise]
     if config.receiver_dome:  # the head turns in still water behind a window

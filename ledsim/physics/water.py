@@ -104,10 +104,15 @@ class Waves(Disturbance):
     sea_depth: float = 0.0
 
     def __post_init__(self):
-        if self.sea_depth and self.depth is not None and self.sea_depth <= self.depth:
-            raise DisturbanceError(f"waves.sea_depth={self.sea_depth:g} is not allowed: "
-                                   f"must be 0 (deep) or deeper than depth={self.depth:g} m")
+        if self.depth is not None:
+            self._check_sea_depth(self.depth)
         self._strips: HullStrips | None = None
+
+    def _check_sea_depth(self, depth: float) -> None:
+        if self.sea_depth and self.sea_depth <= depth:
+            raise DisturbanceError(f"waves.sea_depth={self.sea_depth:g} is not allowed: "
+                                   f"must be 0 (deep) or deeper than the vehicle's "
+                                   f"{depth:g} m")
 
     @property
     def wave(self) -> RegularWave:
@@ -131,10 +136,7 @@ class Waves(Disturbance):
 
     def apply(self, world: LinkWorld, t: float) -> None:
         depth = world.config.depth if self.depth is None else self.depth
-        if self.sea_depth and self.sea_depth <= depth:
-            raise DisturbanceError(f"waves.sea_depth={self.sea_depth:g} is not allowed: "
-                                   f"must be 0 (deep) or deeper than the vehicle's "
-                                   f"{depth:g} m")
+        self._check_sea_depth(depth)
         n = self.strips_in(world)
         if n == 0:
             w = 2 * math.pi / self.period
