@@ -3,7 +3,11 @@
 cascade PI) and the oracle, on the same seeds and disturbances.
 
     python scripts/rl_baseline.py [--steps 200000] [--disturbance SPEC]... [--episodes 20]
-                                  --out DIR          # needs: pip install 'ledsim[rl,train]'
+                                  [--vector-envs N] --out DIR   # needs 'ledsim[rl,train]'
+
+``--vector-envs N`` trains on the native vector env (N worlds stepped in one call,
+``gym.make_vec``) through :mod:`ledsim.envs.sb3`'s adapter, with 1024 transitions per
+update as with one env.
 
 Training episodes start from a random misalignment in +-0.3 rad (``scenario=None``);
 evaluation episodes are seeds 100.. of ``ledsim run --scenario align``, from each start
@@ -111,14 +115,56 @@ def model_policy(model, recurrent: bool):
     return policy_for
 
 
-def train(name: str, steps: int, disturbances, seed: int = 0):
-    """(model, seconds, episode returns as (env steps, return) pairs)."""
+def vector_env(disturbances, stack: int, num_envs: int):
+    """The native vector env (``num_envs`` worlds, one call a step) for
+    stable-baselines3, frame-stacked ``stack`` deep and monitored; its
+    ``get_episode_lengths`` / ``get_episode_rewards`` are :class:`Monitor`'s."""
+    from stable_baselines3.common.vec_env import VecEnvWrapper, VecFrameStack
+
+    from ledsim.envs.sb3 import make_sb3_vec_env
+
+    class Episodes(VecEnvWrapper):
+        def __init__(self, venv):
+            super().__init__(venv)
+            self.returns, self.lengths = np.zeros(venv.num_envs), np.zeros(venv.num_envs, int)
+            self.done_returns, self.done_lengths = [], []
+
+        def reset(self):
+            self.returns[:], self.lengths[:] = 0.0, 0
+            return self.venv.reset()
+
+        def step_wait(self):
+            obs, rew, dones, infos = self.venv.step_wait()
+            self.returns += rew
+            self.lengths += 1
+            for i in np.flatnonzero(dones):
+                self.done_returns.append(float(self.returns[i]))
+                self.done_lengths.append(int(self.lengths[i]))
+                self.returns[i], self.lengths[i] = 0.0, 0
+            return obs, rew, dones, infos
+
+        def get_episode_lengths(self):
+            return self.done_lengths
+
+        def get_episode_rewards(self):
+            return self.done_returns
+
+    venv = make_sb3_vec_env(num_envs=num_envs, scenario=None, disturbances=disturbances)
+    return Episodes(VecFrameStack(venv, stack) if stack > 1 else venv)
+
+
+def train(name: str, steps: int, disturbances, seed: int = 0, vector_envs: int = 0):
+    """(model, seconds, episode returns as (env steps, return) pairs); ``vector_envs``
+    N > 0: on the native vector env of N worlds (0: one env)."""
     from stable_baselines3 import PPO
     from stable_baselines3.common.monitor import Monitor
 
     stack = 8 if name == "ppo" else 1
-    env = Monitor(make_env(disturbances, None, stack))
-    common = dict(seed=seed, device="cpu", verbose=0, n_steps=1024, batch_size=256,
+    env = vector_env(disturbances, stack, vector_envs) if vector_envs else \
+        Monitor(make_env(disturbances, None, stack))
+    # n_steps is per env: the same 1024 transitions per update whatever the worlds.
+    common = dict(seed=seed, device="cpu", verbose=0,
+                  n_steps=max(1024 // max(vector_envs, 1), 1), batch_size=256,
                   gamma=0.99, learning_rate=3e-4)
     if name == "ppo":
         model = PPO("MlpPolicy", env, **common)
@@ -144,6 +190,9 @@ def main() -> int:
     ap.add_argument("--episodes", "--seeds", dest="seeds", type=int, default=20,
                     help="evaluation episodes per start (seeds 100..)")
     ap.add_argument("--out", required=True, help="output folder")
+    ap.add_argument("--vector-envs", type=int, default=0, metavar="N",
+                    help="train on the native vector env of N worlds stepped in one call "
+                    "(gym.make_vec, through ledsim.envs.sb3's adapter); 0: one env")
     ap.add_argument("--reference-only", action="store_true",
                     help="re-evaluate only the shipped stack and the oracle in the "
                     "results.json already in --out, keeping its trained policies' rows "
@@ -155,6 +204,9 @@ def main() -> int:
     try:
         if args.steps < 1:
             raise LedsimError(f"--steps {args.steps} is not allowed: must be >= 1")
+        if args.vector_envs < 0:
+            raise LedsimError(f"--vector-envs {args.vector_envs} is not allowed: must be "
+                              ">= 0")
         if args.seeds < 1:
             raise LedsimError(f"--episodes/--seeds {args.seeds} is not allowed: must be >= 1")
         for d in args.disturbance:
@@ -174,7 +226,8 @@ def main() -> int:
     results, curves = {}, {}
     scratch = tempfile.mkdtemp(prefix="rl_baseline_")
     for name in ("ppo", "recurrent_ppo"):
-        model, seconds, curves[name] = train(name, args.steps, dist)
+        model, seconds, curves[name] = train(name, args.steps, dist,
+                                             vector_envs=args.vector_envs)
         scores = evaluate(model_policy(model, name == "recurrent_ppo"), dist, args.seeds,
                           stack=8 if name == "ppo" else 1)
         results[name] = dict(**scores, train_seconds=seconds, env_steps=args.steps)
@@ -186,7 +239,7 @@ def main() -> int:
             shutil.move(str(Path(scratch) / f"{name}.zip"), tmp / f"{name}.zip")
         atomic_write_text(tmp / "results.json", json.dumps(
             {"disturbances": list(dist), "steps": args.steps, "eval_seeds": args.seeds,
-             **results}, indent=2) + "\n")
+             "vector_envs": args.vector_envs, **results}, indent=2) + "\n")
         _plot(curves, tmp / "learning_curve.png")
     return 0
 

@@ -11,6 +11,10 @@ id                          what it is
                             overrides it
 ==========================  =================================================
 
+``gym.make_vec(id, num_envs=N)`` builds the native vector env of either id
+(:class:`~ledsim.envs.vector.LinkAlignVectorEnv`: N worlds stepped in one call, next-step
+autoreset); ``vectorization_mode="sync"`` or ``"async"`` still gives Gymnasium's own.
+
 A new version for the new default, as Gymnasium's convention asks when results change:
 ``LinkAlign-v0`` keeps its behaviour.
 """
@@ -25,9 +29,11 @@ ENV_ID = "ledsim/LinkAlign-v0"
 ENV_ID_PHYSICAL = "ledsim/LinkAlign-v1"
 if ENV_ID not in registry:
     register(id=ENV_ID, entry_point="ledsim.envs.link_align:LinkAlignEnv",
+             vector_entry_point="ledsim.envs.vector:LinkAlignVectorEnv",
              max_episode_steps=1000)
 if ENV_ID_PHYSICAL not in registry:
     register(id=ENV_ID_PHYSICAL, entry_point="ledsim.envs.link_align:LinkAlignEnv",
+             vector_entry_point="ledsim.envs.vector:LinkAlignVectorEnv",
              max_episode_steps=1000, kwargs={"link": "luma"})
 
 __all__ = ["ENV_ID", "ENV_ID_PHYSICAL", "LinkAlignEnv", "EstimatorObservation",

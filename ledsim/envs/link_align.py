@@ -67,7 +67,7 @@ from ..loop.estimation import run_noise
 from ..optics import IMPOSSIBLE_SIGMAS, achievable_power, peak_power
 from ..physics.sensor import SensorReading
 from ..physics.system import GimbalSystem
-from ..physics.tick import advance
+from ..physics.tick import prepare
 from ..radiometry.presets import link_constants
 
 #: Bounds of the vehicle's readings in the observation (indices 2-6): gyro z [rad/s],
@@ -247,6 +247,18 @@ class LinkAlignEnv(gym.Env, EzPickle):
         return self._observe()
 
     def step(self, action):
+        self.command(action)
+        self.world.step()
+        return self.finish_step()
+
+    # The step in three parts, so that a vector of these envs
+    # (:class:`~ledsim.envs.vector.LinkAlignVectorEnv`) steps the physics of all its
+    # worlds in one pass between the first and the last: the same tick
+    # (:func:`ledsim.physics.tick.advance`) either way.
+
+    def command(self, action) -> float:
+        """Check ``action`` and command its torque [N m] (the physics not yet stepped);
+        returns the torque applied after the motor's limit."""
         if self.sensor is None:
             raise RuntimeError("call reset() before step()")
         a = np.asarray(action, dtype=float).reshape(-1)
@@ -255,8 +267,12 @@ class LinkAlignEnv(gym.Env, EzPickle):
                              "[-1, 1]")
         a = min(max(float(a[0]), -1.0), 1.0)
         self.k += 1
-        advance(self.world, self.disturbances, a * self.torque_limit, self.k * self.dt,
-                self.vehicle)
+        return self.world.set_torque(a * self.torque_limit)
+
+    def finish_step(self):
+        """After the physics stepped: prepare the next control step, observe, reward
+        (``step``'s return)."""
+        prepare(self.world, self.disturbances, self.k * self.dt, self.vehicle)
         obs, info = self._observe()
         reward = self.share_of_achievable()
         return obs, reward, False, False, info

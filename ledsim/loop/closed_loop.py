@@ -16,7 +16,6 @@ import math
 import sys
 import time
 from collections.abc import Callable, Sequence
-from concurrent.futures import ThreadPoolExecutor
 
 import numpy as np
 from tqdm.auto import tqdm
@@ -31,7 +30,7 @@ from ..physics.disturbances import parse_disturbance
 from ..physics.sensor import SensorReading
 from ..physics.simulation import SimulationResult
 from ..physics.system import GimbalSystem
-from ..physics.tick import advance
+from ..physics.tick import PhysicsPass, prepare
 from ..physics.world import LinkWorld
 from ..step import ControlStep, GimbalMotor, Unsupervised
 from .config import RunConfig
@@ -219,15 +218,7 @@ class ClosedLoop:
         self.runs = [LoopRun(cfg, int(s), self.system, self.model, w, self.steps, record)
                      for s, w in zip(seeds, worlds, strict=True)]
         self.threads = max(1, min(int(threads), len(self.runs)))
-        bounds = np.linspace(0, len(self.runs), self.threads + 1).round().astype(int)
-        self._chunks = [range(a, b) for a, b in zip(bounds[:-1], bounds[1:], strict=True)]
         self.on_step = on_step
-
-    def _advance(self, chunk: range, torques: list, k: int, t_next: float) -> None:
-        for i in chunk:
-            run = self.runs[i]
-            run.applied[k] = advance(run.world, run.disturbances, torques[i], t_next,
-                                     run.vehicle)
 
     def run(self, keep_trace: bool | Sequence[bool] = False,
             progress: bool = False, window: float | None = None) -> list[RunOutcome]:
@@ -238,27 +229,22 @@ class ClosedLoop:
         run)."""
         runs, n, Te = self.runs, len(self.runs), self.Te
         keep = [keep_trace] * n if isinstance(keep_trace, bool) else list(keep_trace)
-        torques = [0.0] * n
-        pool = ThreadPoolExecutor(self.threads) if self.threads > 1 else None
         t0 = time.perf_counter()
-        try:
+        # The tick of every world (physics.tick.advance in three parts): torques
+        # commanded, the physics of all worlds in one pass, each world prepared.
+        with PhysicsPass([run.world for run in runs], self.threads) as physics:
             for k in tqdm(range(self.steps), disable=not progress, desc="simulate",
                           leave=False, file=sys.stderr):
                 t = k * Te
-                for i, run in enumerate(runs):
-                    torques[i] = run.control(k, t)
+                for run in runs:
+                    torque = run.control(k, t)
                     if self.on_step is not None:
                         self.on_step(run, t)
+                    run.applied[k] = run.world.set_torque(torque)
+                physics()
                 t_next = (k + 1) * Te
-                if pool is None:
-                    self._advance(self._chunks[0], torques, k, t_next)
-                else:
-                    for f in [pool.submit(self._advance, c, torques, k, t_next)
-                              for c in self._chunks]:
-                        f.result()
-        finally:
-            if pool is not None:
-                pool.shutdown()
+                for run in runs:
+                    prepare(run.world, run.disturbances, t_next, run.vehicle)
         wall = time.perf_counter() - t0
         times = np.arange(self.steps) * Te
         return [outcome(run.result(times), run.xhat, run.flags, self.cfg,

@@ -9,11 +9,19 @@ environment all advance the world through :func:`advance`, and start a step thro
     (the sensor reads, the controller picks a torque)
     advance:      torque commanded (clipped at the limit), physics steps Te,
                   prepare(t + Te)
+
+Many worlds (the runs of several seeds, a vector of environments) take the same three
+parts in turn: every torque commanded, every world's physics stepped in one pass
+(:class:`PhysicsPass`, split over threads: MuJoCo steps without the GIL), every world
+prepared. A world's numbers do not depend on the others beside it.
 """
 
 from __future__ import annotations
 
 from collections.abc import Sequence
+from concurrent.futures import ThreadPoolExecutor
+
+import numpy as np
 
 from .world import LinkWorld
 
@@ -37,3 +45,48 @@ def advance(world: LinkWorld, disturbances: Sequence, torque: float, t_next: flo
     world.step()
     prepare(world, disturbances, t_next, vehicle)
     return applied
+
+
+class PhysicsPass:
+    """Step the physics of many worlds one control period each, split over ``threads``
+    (1: in the calling thread). A context manager: it owns its threads.
+
+    Args:
+        worlds: the worlds, in a fixed order.
+        threads: threads stepping them (at most one per world).
+    """
+
+    def __init__(self, worlds: Sequence[LinkWorld], threads: int = 1):
+        self.worlds = list(worlds)
+        self.threads = max(1, min(int(threads), len(self.worlds)))
+        bounds = np.linspace(0, len(self.worlds), self.threads + 1).round().astype(int)
+        self._chunks = [self.worlds[a:b] for a, b in zip(bounds[:-1], bounds[1:],
+                                                           strict=True)]
+        self._pool = ThreadPoolExecutor(self.threads) if self.threads > 1 else None
+
+    @staticmethod
+    def _step(worlds: Sequence[LinkWorld]) -> None:
+        for w in worlds:
+            w.step()
+
+    def __call__(self, worlds: Sequence[LinkWorld] | None = None) -> None:
+        """One control period of every world's physics (torques already commanded), or
+        of ``worlds`` only."""
+        if self._pool is None:
+            self._step(self.worlds if worlds is None else worlds)
+            return
+        chunks = self._chunks if worlds is None else \
+            [worlds[i::self.threads] for i in range(self.threads)]
+        for f in [self._pool.submit(self._step, c) for c in chunks]:
+            f.result()
+
+    def close(self) -> None:
+        if self._pool is not None:
+            self._pool.shutdown()
+            self._pool = None
+
+    def __enter__(self) -> PhysicsPass:
+        return self
+
+    def __exit__(self, *exc) -> None:
+        self.close()
