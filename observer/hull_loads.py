@@ -14,6 +14,8 @@ from __future__ import annotations
 
 import numpy as np
 
+from .rows import Rows
+
 
 def soft_deadband(square, variance, k: float):
     """The share of a noisy quantity to act on, from its ``square`` and its noise's
@@ -38,7 +40,7 @@ def lowpass_covariance(k1: float, k2: float, r0, r1):
     return k1 * k2 * (r0 + r1 * (a1 + a2)) / (1.0 - a1 * a2)
 
 
-class HullLoadObserver:
+class HullLoadObserver(Rows):
     """The disturbance observer of the module docstring, on the hull's surge, sway and
     heave [N] and pitch and yaw [N m].
 
@@ -56,34 +58,76 @@ class HullLoadObserver:
             estimate turns into a brake for a tenth of a second, but the slow one would
             carry for seconds after it (8 seeds of a 3 rad/s hull kick: the oracle's
             availability 0.811 with both clipped, 0.847 with the slow one alone).
+
+    Stacked (:class:`~observer.rows.Rows`), one observer serves N hulls: ``load`` and
+    ``slow_load`` are then (N, 5), and :meth:`update` takes (N, 5).
     """
+
+    ROW_ARRAYS = ("_load", "_slow_load", "_mass", "_slow_variance", "_gust_variance")
 
     def __init__(self, Te: float, mass, accel_noise_density: float,
                  gyro_noise_density: float, time: float, slow_time: float,
                  deadband: float, limit=None):
-        self.mass = np.asarray(mass, dtype=float)
+        self.single, self.n = True, 1
+        self._mass = np.asarray(mass, dtype=float)[None]
         self.deadband = deadband
         self.limit = None if limit is None else np.asarray(limit, dtype=float)
-        self.load = np.zeros(5)  # fast [N, N m]
-        self.slow_load = np.zeros(5)
+        self._load = np.zeros((1, 5))  # fast [N, N m]
+        self._slow_load = np.zeros((1, 5))
         self.k_fast = min(1.0, Te / time)
         self.k_slow = min(1.0, Te / slow_time)
-        accel = accel_noise_density**2 / Te * self.mass[:3]**2
-        gyro = gyro_noise_density**2 / (2 * Te) * (self.mass[3:] / Te)**2
+        mass = self._mass[0]
+        accel = accel_noise_density**2 / Te * mass[:3]**2
+        gyro = gyro_noise_density**2 / (2 * Te) * (mass[3:] / Te)**2
         r0, r1 = np.r_[accel, 2 * gyro], np.r_[0.0 * accel, -gyro]  # lag 0, 1
         fast, slow = self.k_fast, self.k_slow
-        self.slow_variance = lowpass_covariance(slow, slow, r0, r1)
-        self.gust_variance = (lowpass_covariance(fast, fast, r0, r1) + self.slow_variance
-                              - 2 * lowpass_covariance(fast, slow, r0, r1))
+        slow_variance = lowpass_covariance(slow, slow, r0, r1)
+        self._slow_variance = slow_variance[None]
+        self._gust_variance = (lowpass_covariance(fast, fast, r0, r1) + slow_variance
+                               - 2 * lowpass_covariance(fast, slow, r0, r1))[None]
+
+    def _one(self, rows: np.ndarray) -> np.ndarray:
+        return rows[0] if self.single else rows
+
+    @property
+    def mass(self) -> np.ndarray:
+        """Mass [kg] and inertia [kg m^2] per axis, (5,) ((N, 5) for N hulls)."""
+        return self._one(self._mass)
+
+    @property
+    def slow_variance(self) -> np.ndarray:
+        """The slow estimate's noise variance in still water, per axis."""
+        return self._one(self._slow_variance)
+
+    @property
+    def gust_variance(self) -> np.ndarray:
+        """The fast estimate's excess's noise variance in still water, per axis."""
+        return self._one(self._gust_variance)
+
+    @property
+    def load(self) -> np.ndarray:
+        """The fast estimate [N, N m]."""
+        return self._load[0] if self.single else self._load
+
+    @property
+    def slow_load(self) -> np.ndarray:
+        """The slow estimate [N, N m]."""
+        return self._slow_load[0] if self.single else self._slow_load
 
     def update(self, measured: np.ndarray) -> np.ndarray:
-        """One period with ``M a - thrust`` (5,) [N, N m] measured; returns the load to
-        cancel: the slow estimate and the fast one's excess (a gust), each beyond its
-        noise."""
-        self.load += self.k_fast * (measured - self.load)
+        """One period with ``M a - thrust`` (5,) [N, N m] measured ((N, 5) for N hulls);
+        returns the load to cancel: the slow estimate and the fast one's excess (a gust),
+        each beyond its noise."""
+        measured = np.asarray(measured, dtype=float)
+        out = self.update_rows(measured[None] if self.single else measured)
+        return out[0] if self.single else out
+
+    def update_rows(self, measured: np.ndarray) -> np.ndarray:
+        """:meth:`update` of every hull, (N, 5)."""
+        self._load = self._load + self.k_fast * (measured - self._load)
         if self.limit is not None:
             measured = np.clip(measured, -self.limit, self.limit)
-        self.slow_load += self.k_slow * (measured - self.slow_load)
-        gust, k = self.load - self.slow_load, self.deadband
-        return self.slow_load * soft_deadband(self.slow_load**2, self.slow_variance, k) \
-            + gust * soft_deadband(gust**2, self.gust_variance, k)
+        self._slow_load = self._slow_load + self.k_slow * (measured - self._slow_load)
+        slow, gust, k = self._slow_load, self._load - self._slow_load, self.deadband
+        return slow * soft_deadband(slow**2, self._slow_variance, k) \
+            + gust * soft_deadband(gust**2, self._gust_variance, k)

@@ -31,86 +31,34 @@ position fix   p at the time it was measured (``delay``   per fix (may grow with
                s ago, from the INS's own displacement)    outliers rejected by a gate
 =============  =========================================  =============================
 
-Numpy only, any vehicle: ledsim's vehicle (``ledsim.physics.vehicle``) feeds it.
+Numpy only, any vehicle: ledsim's vehicle (``ledsim.physics.vehicle``) feeds it. One
+filter runs one vehicle, or the vehicles of N worlds at once (a state with a leading
+axis of N): every row computed as the filter of one computes it (stacked matrix
+products run each row through the same BLAS kernel), so a vehicle's navigation does not
+depend on the batch it runs in.
 """
 
 from __future__ import annotations
 
 import math
 from collections import deque
-from dataclasses import dataclass
 
 import numpy as np
 
+from .ins_aiding import _T, BA, BG, FIX_GATE, N_ERROR, TH, InsAiding, P, V, _mv
+from .ins_state import InertialNoise, InsState
 from .rotations import rotation_exp, rotation_log, skew
-
-#: Error-state blocks: position, velocity, attitude, gyro bias, accelerometer bias.
-P, V, TH, BG, BA = (slice(0, 3), slice(3, 6), slice(6, 9), slice(9, 12), slice(12, 15))
-N_ERROR = 15
-#: chi-square(3) at 1 - 1e-4: a fix whose normalised innovation exceeds it is an outlier.
-FIX_GATE = 21.11
+from .rows import Rows
 
 
-@dataclass(frozen=True)
-class InertialNoise:
-    """What the filter knows of its sensors' noise (SI units).
-
-    Attributes:
-        gyro_noise_density: angle random walk [rad/s/sqrt(Hz)].
-        gyro_bias_instability: stationary spread of the gyro bias [rad/s].
-        gyro_bias_time: its correlation time [s].
-        accel_noise_density: velocity random walk [m/s^2/sqrt(Hz)].
-        accel_bias_instability: stationary spread of the accelerometer bias [m/s^2].
-        accel_bias_time: its correlation time [s].
-        dvl_noise: one DVL ping's velocity noise, each axis [m/s].
-        depth_noise: one depth reading's noise [m].
-        magnetometer_noise: one magnetometer reading's noise, each axis [field unit].
-    """
-
-    gyro_noise_density: float
-    gyro_bias_instability: float
-    gyro_bias_time: float
-    accel_noise_density: float
-    accel_bias_instability: float
-    accel_bias_time: float
-    dvl_noise: float
-    depth_noise: float
-    magnetometer_noise: float
-
-
-@dataclass
-class InsState:
-    """The filter's estimate: position (3,) [m] and velocity (3,) [m/s] in the world
-    frame (z up), attitude (3x3, body to world), gyro bias (3,) [rad/s] and accelerometer
-    bias (3,) [m/s^2]."""
-
-    position: np.ndarray
-    velocity: np.ndarray
-    attitude: np.ndarray
-    gyro_bias: np.ndarray
-    accel_bias: np.ndarray
-
-    @property
-    def heading(self) -> float:
-        """Yaw of the body's x axis about world z [rad]."""
-        return math.atan2(self.attitude[1, 0], self.attitude[0, 0])
-
-    @property
-    def pitch(self) -> float:
-        """Pitch of the body's x axis above the horizontal, nose down positive [rad]."""
-        return math.asin(max(-1.0, min(1.0, -self.attitude[2, 0])))
-
-    def copy(self) -> InsState:
-        return InsState(self.position.copy(), self.velocity.copy(), self.attitude.copy(),
-                        self.gyro_bias.copy(), self.accel_bias.copy())
-
-
-class AidedINS:
+class AidedINS(InsAiding, Rows):
     """The error-state Kalman filter of the module docstring.
 
     Args:
         Te: IMU period [s].
-        state: the start's estimate (:class:`InsState`).
+        state: the start's estimate (:class:`InsState`); with a leading axis of N on
+            every field, the filters of N vehicles (then ``state``, ``P`` and the
+            methods' arguments and results have that axis too).
         noise: the sensors' noise (:class:`InertialNoise`).
         gravity: gravity's magnitude [m/s^2] (world z up).
         dvl_rotation: the DVL's frame in the body frame (3x3; None: the body frame).
@@ -128,15 +76,21 @@ class AidedINS:
                  initial_std: tuple[float, float, float] = (1e-3, 1e-3, 1e-3),
                  history: int = 600):
         self.Te, self.noise, self.gravity = Te, noise, gravity
-        self.state = state.copy()
+        self.single = np.ndim(state.position) == 1
+        st = state.copy()
+        if self.single:
+            st = InsState(*(x[None] for x in (st.position, st.velocity, st.attitude,
+                                               st.gyro_bias, st.accel_bias)))
+        self.states, self.n = st, len(st.position)
         self.R_dvl = np.eye(3) if dvl_rotation is None else np.asarray(dvl_rotation, float)
         self.l_dvl = np.zeros(3) if dvl_lever is None else np.asarray(dvl_lever, float)
         self.field = None if magnetic_field is None else np.asarray(magnetic_field, float)
         n = noise
         sp, sv, sa = initial_std
-        self.P = np.diag(np.r_[[sp**2] * 3, [sv**2] * 3, [sa**2] * 3,
-                               [n.gyro_bias_instability**2] * 3,
-                               [n.accel_bias_instability**2] * 3])
+        P0 = np.diag(np.r_[[sp**2] * 3, [sv**2] * 3, [sa**2] * 3,
+                           [n.gyro_bias_instability**2] * 3,
+                           [n.accel_bias_instability**2] * 3])
+        self.Ps = np.repeat(P0[None], self.n, axis=0)
         self._decay_g = math.exp(-Te / n.gyro_bias_time)
         self._decay_a = math.exp(-Te / n.accel_bias_time)
         qa = n.accel_noise_density**2 * Te  # velocity noise per period [m^2/s^2]
@@ -148,127 +102,154 @@ class AidedINS:
         Q[BG, BG] = np.eye(3) * n.gyro_bias_instability**2 * (1 - self._decay_g**2)
         Q[BA, BA] = np.eye(3) * n.accel_bias_instability**2 * (1 - self._decay_a**2)
         self.Q = Q
-        self._F = np.eye(N_ERROR)
-        self._F[BG, BG] *= self._decay_g
-        self._F[BA, BA] *= self._decay_a
-        self._F[P, V] = np.eye(3) * Te
-        self._F[TH, BG] = -np.eye(3) * Te
+        F = np.eye(N_ERROR)
+        F[BG, BG] *= self._decay_g
+        F[BA, BA] *= self._decay_a
+        F[P, V] = np.eye(3) * Te
+        F[TH, BG] = -np.eye(3) * Te
+        self._F = np.repeat(F[None], self.n, axis=0)
+        # The DVL's model: its lever arm's matrix and its noise.
+        self._lever = skew(self.l_dvl)
+        gyro_var = n.gyro_noise_density**2 / (2 * Te)
+        self._R_dvl_noise = np.eye(3) * n.dvl_noise**2 + gyro_var * (self._lever @ self._lever.T)
         # The INS's own displacement since the start, per period: a late fix is compared
         # with where the INS was then, p(now) less the displacement since.
-        self.displacement = np.zeros(3)
-        self._history: deque[np.ndarray] = deque(maxlen=history)
-        self.rejected_fixes = 0  # fixes the outlier gate refused
+        self.displacements = np.zeros((self.n, 3))
+        self._histories = [deque(maxlen=history) for _ in range(self.n)]
+        self.rejected = np.zeros(self.n, dtype=int)  # fixes the outlier gate refused
+
+    ROW_ARRAYS = ("Ps", "_F", "displacements", "rejected")
+    ROW_LISTS = ("_histories",)
+    _STATE = ("position", "velocity", "attitude", "gyro_bias", "accel_bias")
+
+    @classmethod
+    def stacked(cls, items):
+        out = super().stacked(items)
+        out.states = InsState(*(np.concatenate([getattr(i.states, f) for i in items])
+                                for f in cls._STATE))
+        return out
+
+    def put(self, row: int, item) -> None:
+        super().put(row, item)
+        for f in self._STATE:
+            mine = getattr(self.states, f).copy()
+            mine[row] = getattr(item.states, f)[0]
+            setattr(self.states, f, mine)
+
+    @property
+    def _history(self) -> deque:
+        """The displacement history of the (first) vehicle."""
+        return self._histories[0]
+
+    # -- one vehicle's view ------------------------------------------------------------------
+
+    def _one(self, rows):
+        return rows[0] if self.single else rows
+
+    @property
+    def state(self) -> InsState:
+        s = self.states
+        if not self.single:
+            return s
+        return InsState(s.position[0], s.velocity[0], s.attitude[0], s.gyro_bias[0],
+                        s.accel_bias[0])
+
+    @property
+    def P(self) -> np.ndarray:
+        """The error covariance (15, 15) ((N, 15, 15) for N vehicles)."""
+        return self._one(self.Ps)
+
+    @P.setter
+    def P(self, value) -> None:
+        self.Ps = np.array(value, dtype=float).reshape(self.Ps.shape)
+
+    @property
+    def displacement(self) -> np.ndarray:
+        return self._one(self.displacements)
+
+    @property
+    def rejected_fixes(self):
+        """Fixes the outlier gate refused (one count per vehicle)."""
+        return int(self.rejected[0]) if self.single else self.rejected
+
+    def _rows(self, x) -> np.ndarray:
+        return np.asarray(x, dtype=float)[None] if self.single else np.asarray(x, float)
 
     # -- propagation -----------------------------------------------------------------------
 
     def propagate(self, delta_angle, delta_velocity) -> InsState:
         """One IMU period: the delta angle (3,) [rad] and delta velocity (3,) [m/s] in the
         body frame (specific force, the end of the period's frame)."""
-        s, Te = self.state, self.Te
-        dth = np.asarray(delta_angle, dtype=float) - s.gyro_bias * Te
-        dv = np.asarray(delta_velocity, dtype=float) - s.accel_bias * Te
+        self.propagate_rows(self._rows(delta_angle), self._rows(delta_velocity))
+        return self.state
+
+    def propagate_rows(self, delta_angle: np.ndarray, delta_velocity: np.ndarray) -> None:
+        """:meth:`propagate` of every vehicle, (N, 3) each."""
+        s, Te = self.states, self.Te
+        dth = delta_angle - s.gyro_bias * Te
+        dv = delta_velocity - s.accel_bias * Te
         turn = rotation_exp(dth)
         R = s.attitude @ turn
-        v = s.velocity + R @ dv
-        v[2] -= Te * self.gravity
+        v = s.velocity + _mv(R, dv)
+        v[:, 2] -= Te * self.gravity
         step = 0.5 * Te * (s.velocity + v)
         s.position = s.position + step
         s.velocity, s.attitude = v, R
-        self.displacement = self.displacement + step
-        self._history.append(self.displacement)
+        self.displacements = self.displacements + step
+        for h, d in zip(self._histories, self.displacements, strict=True):
+            h.append(d)
         # The error's transition (first order in Te).
         F = self._F
         Rdv = R @ skew(dv)
-        F[V, TH] = -Rdv @ turn.T
-        F[V, BG] = Rdv * Te
-        F[V, BA] = -R * Te
-        F[P, TH] = 0.5 * Te * F[V, TH]
-        F[P, BG] = 0.5 * Te * F[V, BG]
-        F[P, BA] = 0.5 * Te * F[V, BA]
-        F[TH, TH] = turn.T
-        self.P = F @ self.P @ F.T + self.Q
-        return s
+        F[:, V, TH] = -Rdv @ _T(turn)
+        F[:, V, BG] = Rdv * Te
+        F[:, V, BA] = -R * Te
+        F[:, P, TH] = 0.5 * Te * F[:, V, TH]
+        F[:, P, BG] = 0.5 * Te * F[:, V, BG]
+        F[:, P, BA] = 0.5 * Te * F[:, V, BA]
+        F[:, TH, TH] = _T(turn)
+        self.Ps = F @ self.Ps @ _T(F) + self.Q
 
-    # -- aiding ------------------------------------------------------------------------------
-
-    def _correct(self, residual: np.ndarray, H: np.ndarray, Rm: np.ndarray,
-                 gate: float | None = None) -> float:
-        """The Kalman update with ``residual`` (measured less predicted), its Jacobian
-        ``H`` on the error state and its noise ``Rm``; refused (the state untouched) when
-        the normalised innovation squared exceeds ``gate``. Returns that NIS."""
-        PHt = self.P @ H.T
-        S = H @ PHt + Rm
-        Sinv = np.linalg.inv(S)
-        nis = float(residual @ Sinv @ residual)
-        if gate is not None and nis > gate:
-            return nis
-        K = PHt @ Sinv
-        dx = K @ residual
-        IKH = np.eye(N_ERROR) - K @ H
-        self.P = IKH @ self.P @ IKH.T + K @ Rm @ K.T
-        self._inject(dx)
-        return nis
+    # -- aiding (one vehicle's or every vehicle's reading; InsAiding holds the math) --------
 
     def _inject(self, dx: np.ndarray) -> None:
-        s = self.state
-        s.position = s.position + dx[P]
-        s.velocity = s.velocity + dx[V]
-        s.attitude = s.attitude @ rotation_exp(dx[TH])
-        s.gyro_bias = s.gyro_bias + dx[BG]
-        s.accel_bias = s.accel_bias + dx[BA]
+        """Correct every vehicle's nominal state by the error ``dx`` (15,) ((N, 15))."""
+        self._inject_rows(slice(None), self._rows(dx))
 
-    def update_dvl(self, velocity, gyro) -> float:
+    def _targets(self, rows):
+        return np.arange(self.n) if rows is None else np.asarray(rows)
+
+    def update_dvl(self, velocity, gyro, rows=None):
         """A DVL ping: the velocity (3,) [m/s] in the DVL's frame, and the gyro's reading
-        (3,) [rad/s] at the ping (for its lever arm). Returns the NIS."""
-        s = self.state
-        omega = np.asarray(gyro, dtype=float) - s.gyro_bias
-        v_body = s.attitude.T @ s.velocity
-        lever = skew(self.l_dvl)
-        predicted = self.R_dvl.T @ (v_body - lever @ omega)
-        H = np.zeros((3, N_ERROR))
-        H[:, V] = self.R_dvl.T @ s.attitude.T
-        H[:, TH] = self.R_dvl.T @ skew(v_body)
-        H[:, BG] = self.R_dvl.T @ lever
-        n = self.noise
-        gyro_var = n.gyro_noise_density**2 / (2 * self.Te)
-        Rm = np.eye(3) * n.dvl_noise**2 + gyro_var * (lever @ lever.T)
-        return self._correct(np.asarray(velocity, dtype=float) - predicted, H, Rm)
+        (3,) [rad/s] at the ping (for its lever arm); ``rows``: which of N vehicles
+        pinged (None: all). Returns the NIS."""
+        return self._one(self.dvl_rows(self._targets(rows), self._rows(velocity),
+                                       self._rows(gyro)))
 
-    def update_depth(self, depth: float, surface: float) -> None:
+    def update_depth(self, depth, surface) -> None:
         """A depth reading [m] (positive down) below the height ``surface`` [m] where
-        depth is 0 (a scalar update on p_z)."""
-        r = float(depth) - (surface - self.state.position[2])
-        ph = self.P[:, 2].copy()  # P H^T with H = -e_z, sign apart
-        S = ph[2] + self.noise.depth_noise**2
-        self.P -= np.outer(ph, ph) / S  # the optimal gain's update, symmetric as it is
-        self._inject(ph * (-r / S))
+        depth is 0 (a scalar update on p_z); one per vehicle."""
+        self.depth_rows(np.asarray(depth, dtype=float).reshape(self.n),
+                        np.asarray(surface, dtype=float))
 
-    def update_magnetometer(self, field) -> float:
-        """A magnetometer reading (3,) in the body frame [field unit]. Returns the NIS."""
-        if self.field is None:
-            raise ValueError("this INS has no magnetic field to compare a reading with")
-        s = self.state
-        predicted = s.attitude.T @ self.field
-        H = np.zeros((3, N_ERROR))
-        H[:, TH] = skew(predicted)
-        Rm = np.eye(3) * self.noise.magnetometer_noise**2
-        return self._correct(np.asarray(field, dtype=float) - predicted, H, Rm)
+    def update_magnetometer(self, field, rows=None):
+        """A magnetometer reading (3,) in the body frame [field unit]; ``rows``: which
+        of N vehicles read one (None: all). Returns the NIS."""
+        return self._one(self.magnetometer_rows(self._targets(rows), self._rows(field)))
 
-    def update_position(self, fix, std: float, delay: float = 0.0,
-                        gate: float | None = FIX_GATE) -> bool:
+    def update_position(self, fix, std, delay=0.0, gate: float | None = FIX_GATE,
+                        rows=None):
         """An acoustic fix of the position (3,) [m], world frame, with standard deviation
-        ``std`` [m] each axis, measured ``delay`` [s] ago. Returns whether it was taken:
-        a fix whose normalised innovation exceeds ``gate`` is an outlier and refused
-        (None: every fix is taken)."""
-        back = min(int(round(delay / self.Te)), len(self._history) - 1)
-        since = (self.displacement - self._history[-1 - back]) if back > 0 else 0.0
-        then = self.state.position - since
-        H = np.zeros((3, N_ERROR))
-        H[:, P] = np.eye(3)
-        nis = self._correct(np.asarray(fix, dtype=float) - then, H, np.eye(3) * std**2, gate)
-        taken = gate is None or nis <= gate
-        self.rejected_fixes += not taken
-        return taken
+        ``std`` [m] each axis, measured ``delay`` [s] ago; ``rows``: which of N vehicles
+        got one (None: all). Returns whether it was taken: a fix whose normalised
+        innovation exceeds ``gate`` is an outlier and refused (None: every fix is
+        taken)."""
+        rows = self._targets(rows)
+        taken = self.position_rows(rows, self._rows(fix),
+                                   np.broadcast_to(np.asarray(std, float), len(rows)),
+                                   np.broadcast_to(np.asarray(delay, float), len(rows)),
+                                   gate)
+        return bool(taken[0]) if self.single else taken
 
     # -- reading -----------------------------------------------------------------------------
 

@@ -22,6 +22,11 @@ from __future__ import annotations
 import math
 from dataclasses import dataclass
 
+import numpy as np
+
+from .rotations import libm_square, per_element
+from .rows import Rows
+
 
 @dataclass
 class LineOfSight:
@@ -47,7 +52,7 @@ class LineOfSight:
         return self.rate - self.hull_rate
 
 
-class LineOfSightFilter:
+class LineOfSightFilter(Rows):
     """The estimator of the module docstring.
 
     Args:
@@ -59,7 +64,13 @@ class LineOfSightFilter:
         bearing_time: the bearing's pull towards the navigation's [s].
         reanchor_rate [rad/s], reanchor_time [s], reanchor_bearing_time [s]: the pull
             after a violent excursion.
+
+    Stacked (:class:`~observer.rows.Rows`), one filter serves N vehicles:
+    :meth:`update_rows` takes their arrays and :meth:`los_of` gives each one's.
     """
+
+    ROW_ARRAYS = ("rate", "acceleration", "hull_rate", "bearing", "_raw", "_power",
+                  "_anchor", "k", "_noise_power")
 
     def __init__(self, Te: float, distance: float, rate_noise: float,
                  rate_time: float = 0.05, bearing_time: float = 2.0,
@@ -70,28 +81,50 @@ class LineOfSightFilter:
         self.k_bearing = min(1.0, Te / bearing_time)
         self.reanchor_rate, self.reanchor_time = reanchor_rate, reanchor_time
         self.k_reanchor = min(1.0, Te / reanchor_bearing_time)
-        self.los = LineOfSight()
-        self._raw = self._power = self._anchor = 0.0
-        self.k = 0
+        self.single, self.n = True, 1
+        self._noise_power = np.array([rate_noise**2])
+        self.rate, self.acceleration = np.zeros(1), np.zeros(1)
+        self.hull_rate, self.bearing = np.zeros(1), np.zeros(1)
+        self._raw, self._power, self._anchor = np.zeros(1), np.zeros(1), np.zeros(1)
+        self.k = np.zeros(1, dtype=np.int64)
+
+    def los_of(self, i: int) -> LineOfSight:
+        """Vehicle ``i``'s line of sight at its last step."""
+        return LineOfSight(float(self.rate[i]), float(self.acceleration[i]),
+                           float(self.hull_rate[i]), float(self.bearing[i]))
+
+    @property
+    def los(self) -> LineOfSight:
+        """What the (first) vehicle measured of the line of sight at its last step."""
+        return self.los_of(0)
 
     def update(self, v_gimbal, encoder: float, hull_rate: float,
                nav_bearing: float) -> LineOfSight:
         """One step: the hinge's velocity (3,) [m/s] in the hull's frame, the encoder
         angle [rad], the hull's yaw rate [rad/s] and the bearing the navigated pose
         gives, since the start [rad]."""
-        c, s = math.cos(encoder), math.sin(encoder)
-        raw = (-c * v_gimbal[1] + s * v_gimbal[0]) / self.distance
-        self._raw += self.k_rate * (raw - self._raw)
-        self._power += self.k_power * (self._raw**2 - self._power)
-        rate = self._raw * max(0.0, 1.0 - self.rate_noise**2 / max(self._power, 1e-30))
-        accel = (rate - self.los.rate) / self.Te if self.k else 0.0
-        bearing = self.los.bearing + self.Te * (rate - hull_rate)
-        if abs(raw) > self.reanchor_rate:
-            self._anchor = self.reanchor_time
-        k = self.k_bearing
-        if self._anchor > 0:
-            k, self._anchor = self.k_reanchor, self._anchor - self.Te
-        bearing += k * math.remainder(nav_bearing - bearing, 2 * math.pi)
-        self.los = LineOfSight(rate, accel, hull_rate, bearing)
-        self.k += 1
+        self.update_rows(np.asarray(v_gimbal, dtype=float)[None], np.array([encoder]),
+                         np.array([hull_rate]), np.array([nav_bearing]))
         return self.los
+
+    def update_rows(self, v_gimbal: np.ndarray, encoder: np.ndarray, hull_rate: np.ndarray,
+                    nav_bearing: np.ndarray) -> None:
+        """:meth:`update` of every vehicle: (N, 3), (N,), (N,), (N,)."""
+        c, s = np.cos(encoder), np.sin(encoder)
+        raw = (-c * v_gimbal[:, 1] + s * v_gimbal[:, 0]) / self.distance
+        self._raw = self._raw + self.k_rate * (raw - self._raw)
+        self._power = self._power + self.k_power * (libm_square(self._raw) - self._power)
+        rate = self._raw * np.maximum(0.0, 1.0 - self._noise_power
+                                      / np.maximum(self._power, 1e-30))
+        accel = np.where(self.k > 0, (rate - self.rate) / self.Te, 0.0)
+        bearing = self.bearing + self.Te * (rate - hull_rate)
+        self._anchor = np.where(np.abs(raw) > self.reanchor_rate, self.reanchor_time,
+                                self._anchor)
+        pulled = self._anchor > 0
+        k = np.where(pulled, self.k_reanchor, self.k_bearing)
+        self._anchor = np.where(pulled, self._anchor - self.Te, self._anchor)
+        bearing = bearing + k * per_element(math.remainder, nav_bearing - bearing,
+                                            2 * math.pi)
+        self.rate, self.acceleration, self.hull_rate, self.bearing = \
+            rate, accel, np.asarray(hull_rate, dtype=float).copy(), bearing
+        self.k = self.k + 1

@@ -117,40 +117,14 @@ def model_policy(model, recurrent: bool):
 
 def vector_env(disturbances, stack: int, num_envs: int):
     """The native vector env (``num_envs`` worlds, one call a step) for
-    stable-baselines3, frame-stacked ``stack`` deep and monitored; its
-    ``get_episode_lengths`` / ``get_episode_rewards`` are :class:`Monitor`'s."""
-    from stable_baselines3.common.vec_env import VecEnvWrapper, VecFrameStack
+    stable-baselines3, frame-stacked ``stack`` deep, with :class:`Monitor`'s episode
+    record."""
+    from stable_baselines3.common.vec_env import VecFrameStack
 
-    from ledsim.envs.sb3 import make_sb3_vec_env
-
-    class Episodes(VecEnvWrapper):
-        def __init__(self, venv):
-            super().__init__(venv)
-            self.returns, self.lengths = np.zeros(venv.num_envs), np.zeros(venv.num_envs, int)
-            self.done_returns, self.done_lengths = [], []
-
-        def reset(self):
-            self.returns[:], self.lengths[:] = 0.0, 0
-            return self.venv.reset()
-
-        def step_wait(self):
-            obs, rew, dones, infos = self.venv.step_wait()
-            self.returns += rew
-            self.lengths += 1
-            for i in np.flatnonzero(dones):
-                self.done_returns.append(float(self.returns[i]))
-                self.done_lengths.append(int(self.lengths[i]))
-                self.returns[i], self.lengths[i] = 0.0, 0
-            return obs, rew, dones, infos
-
-        def get_episode_lengths(self):
-            return self.done_lengths
-
-        def get_episode_rewards(self):
-            return self.done_returns
+    from ledsim.envs.sb3 import EpisodeRecord, make_sb3_vec_env
 
     venv = make_sb3_vec_env(num_envs=num_envs, scenario=None, disturbances=disturbances)
-    return Episodes(VecFrameStack(venv, stack) if stack > 1 else venv)
+    return EpisodeRecord(VecFrameStack(venv, stack) if stack > 1 else venv)
 
 
 def train(name: str, steps: int, disturbances, seed: int = 0, vector_envs: int = 0):

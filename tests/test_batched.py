@@ -47,6 +47,20 @@ def test_a_batch_gives_each_seed_its_single_run_exactly(kw):
         _assert_identical(b, run_once(cfg, seed, keep_trace=True), f"seed {seed}")
 
 
+@pytest.mark.parametrize("kw", [
+    dict(disturbances=("current:speed=0.05,gust=0.02",)),
+    dict(disturbances=("waves:height=0.3,period=4", "dvl_dropout:start=0.3,duration=0.2")),
+], ids=["current", "waves-dvl-dropout"])
+def test_a_seed_is_the_same_in_batches_of_1_3_and_64(kw):
+    cfg = RunConfig(seconds=0.6, **kw)
+    big = run_batch(cfg, range(64), keep_trace=True)
+    three = run_batch(cfg, [0, 31, 63], keep_trace=True)
+    for j, seed in enumerate((0, 31, 63)):
+        one = run_once(cfg, seed, keep_trace=True)
+        _assert_identical(big[seed], one, f"seed {seed} of 64")
+        _assert_identical(three[j], one, f"seed {seed} of 3")
+
+
 @pytest.mark.parametrize("supervision", [False, True], ids=["unsupervised", "supervised"])
 def test_the_same_command_gives_the_same_numbers_for_any_workers(supervision):
     # The case that differed (availability 0.1007 with one worker, 0.1247 with three):

@@ -251,10 +251,8 @@ class LinkAlignEnv(gym.Env, EzPickle):
         self.world.step()
         return self.finish_step()
 
-    # The step in three parts, so that a vector of these envs
-    # (:class:`~ledsim.envs.vector.LinkAlignVectorEnv`) steps the physics of all its
-    # worlds in one pass between the first and the last: the same tick
-    # (:func:`ledsim.physics.tick.advance`) either way.
+    # The step in parts, so that a vector of these envs (envs.vector) steps the physics
+    # and the vehicles of all its worlds in one pass: the same tick either way.
 
     def command(self, action) -> float:
         """Check ``action`` and command its torque [N m] (the physics not yet stepped);
@@ -273,6 +271,11 @@ class LinkAlignEnv(gym.Env, EzPickle):
         """After the physics stepped: prepare the next control step, observe, reward
         (``step``'s return)."""
         prepare(self.world, self.disturbances, self.k * self.dt, self.vehicle)
+        return self.observe_step()
+
+    def observe_step(self):
+        """After the next control step was prepared (its vehicle acted): observe and
+        reward (``step``'s return)."""
         obs, info = self._observe()
         reward = self.share_of_achievable()
         return obs, reward, False, False, info

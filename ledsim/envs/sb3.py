@@ -17,7 +17,7 @@ from __future__ import annotations
 
 import numpy as np
 from gymnasium.vector import AutoresetMode
-from stable_baselines3.common.vec_env import VecEnv
+from stable_baselines3.common.vec_env import VecEnv, VecEnvWrapper
 
 
 class VectorEnvForSB3(VecEnv):
@@ -82,6 +82,37 @@ class VectorEnvForSB3(VecEnv):
 
     def env_is_wrapped(self, wrapper_class, indices=None) -> list[bool]:
         return [False] * len(self._get_indices(indices))
+
+
+class EpisodeRecord(VecEnvWrapper):
+    """Records each finished episode's return and length, as stable-baselines3's
+    ``Monitor`` does for one env (``get_episode_rewards``, ``get_episode_lengths``)."""
+
+    def __init__(self, venv):
+        super().__init__(venv)
+        self.returns, self.lengths = np.zeros(venv.num_envs), np.zeros(venv.num_envs, int)
+        self.done_returns: list[float] = []
+        self.done_lengths: list[int] = []
+
+    def reset(self):
+        self.returns[:], self.lengths[:] = 0.0, 0
+        return self.venv.reset()
+
+    def step_wait(self):
+        obs, rew, dones, infos = self.venv.step_wait()
+        self.returns += rew
+        self.lengths += 1
+        for i in np.flatnonzero(dones):
+            self.done_returns.append(float(self.returns[i]))
+            self.done_lengths.append(int(self.lengths[i]))
+            self.returns[i], self.lengths[i] = 0.0, 0
+        return obs, rew, dones, infos
+
+    def get_episode_lengths(self) -> list[int]:
+        return self.done_lengths
+
+    def get_episode_rewards(self) -> list[float]:
+        return self.done_returns
 
 
 def make_sb3_vec_env(env_id: str = "ledsim/LinkAlign-v0", num_envs: int = 8,

@@ -27,7 +27,8 @@ import numpy as np
 from gymnasium.vector import AutoresetMode, VectorEnv
 from gymnasium.vector.utils import batch_space
 
-from ..physics.tick import PhysicsPass
+from ..physics.tick import PhysicsPass, prepare
+from ..physics.vehicle import Vehicle
 from .link_align import LinkAlignEnv
 
 #: The autoreset modes by name (the enum's values are spelt too: ``"NextStep"``).
@@ -88,6 +89,7 @@ class LinkAlignVectorEnv(VectorEnv):
         self._physics = PhysicsPass([e.world for e in self.envs], threads)
         self._elapsed = np.zeros(self.num_envs, dtype=np.int64)
         self._ended = np.zeros(self.num_envs, dtype=bool)  # next-step: reset at this step
+        self._vehicles: Vehicle | None = None
 
     def reset(self, *, seed: int | list | None = None, options: dict | None = None):
         """Reset every sub-environment: ``seed`` S gives sub-environment i the seed
@@ -105,7 +107,23 @@ class LinkAlignVectorEnv(VectorEnv):
                                                                     strict=True)]
         self._elapsed[:] = 0
         self._ended[:] = False
+        # The sub-environments' vehicles (each started as its own) as one, stepped in
+        # one pass; each sub-environment reads its row.
+        self._vehicles = None
+        if self.envs[0].vehicle is not None:
+            self._vehicles = Vehicle.stacked([e.vehicle for e in self.envs])
+            for i, e in enumerate(self.envs):
+                e.vehicle = self._vehicles.row(i)
         return self._stack_obs([o for o, _ in firsts]), self._stack_info([i for _, i in firsts])
+
+    def _reset_one(self, i: int):
+        """Sub-environment ``i`` anew (its next episode), its vehicle back in its row."""
+        first = self.envs[i].reset()
+        self._elapsed[i] = 0
+        if self._vehicles is not None:
+            self._vehicles.put(i, self.envs[i].vehicle)
+            self.envs[i].vehicle = self._vehicles.row(i)
+        return first
 
     def step(self, actions):
         actions = np.asarray(actions)
@@ -119,18 +137,22 @@ class LinkAlignVectorEnv(VectorEnv):
             envs[i].command(actions[i])
         self._physics(None if stepping.all() else
                       [envs[i].world for i in np.flatnonzero(stepping)])
+        for i in np.flatnonzero(stepping):
+            e = envs[i]
+            prepare(e.world, e.disturbances, e.k * e.dt)
+        if self._vehicles is not None:  # every row (a resetting one is put back below)
+            self._vehicles.act_rows(np.array([e.k * e.dt for e in envs]))
         obs, infos = [None] * n, [None] * n
         reward = np.zeros(n)
         truncated = np.zeros(n, dtype=bool)
         for i in range(n):
             if stepping[i]:
-                obs[i], reward[i], _, _, infos[i] = envs[i].finish_step()
+                obs[i], reward[i], _, _, infos[i] = envs[i].observe_step()
                 self._elapsed[i] += 1
                 truncated[i] = self.max_episode_steps is not None and \
                     self._elapsed[i] >= self.max_episode_steps
             else:  # next-step autoreset of an episode that ended last step
-                obs[i], infos[i] = envs[i].reset()
-                self._elapsed[i] = 0
+                obs[i], infos[i] = self._reset_one(i)
         terminated = np.zeros(n, dtype=bool)
         if self.mode == AutoresetMode.NEXT_STEP:
             self._ended = truncated.copy()
@@ -142,8 +164,7 @@ class LinkAlignVectorEnv(VectorEnv):
             final_info = np.empty(n, dtype=object)
             for i in final:
                 final_obs[i], final_info[i] = obs[i], infos[i]
-                obs[i], infos[i] = envs[i].reset()
-                self._elapsed[i] = 0
+                obs[i], infos[i] = self._reset_one(i)
             info = {"final_obs": final_obs, "_final_obs": truncated.copy(),
                     "final_info": final_info, "_final_info": truncated.copy()}
         return (self._stack_obs(obs), reward, terminated, truncated,

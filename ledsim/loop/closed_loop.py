@@ -31,6 +31,7 @@ from ..physics.sensor import SensorReading
 from ..physics.simulation import SimulationResult
 from ..physics.system import GimbalSystem
 from ..physics.tick import PhysicsPass, prepare
+from ..physics.vehicle import Vehicle
 from ..physics.world import LinkWorld
 from ..step import ControlStep, GimbalMotor, Unsupervised
 from .config import RunConfig
@@ -217,6 +218,12 @@ class ClosedLoop:
             for _ in seeds[1:]]
         self.runs = [LoopRun(cfg, int(s), self.system, self.model, w, self.steps, record)
                      for s, w in zip(seeds, worlds, strict=True)]
+        # The runs' vehicles as one (each started as its own): one pass steps them all.
+        self.vehicles = None
+        if self.runs[0].vehicle is not None:
+            self.vehicles = Vehicle.stacked([run.vehicle for run in self.runs])
+            for i, run in enumerate(self.runs):
+                run.vehicle = self.vehicles.row(i)
         self.threads = max(1, min(int(threads), len(self.runs)))
         self.on_step = on_step
 
@@ -230,8 +237,9 @@ class ClosedLoop:
         runs, n, Te = self.runs, len(self.runs), self.Te
         keep = [keep_trace] * n if isinstance(keep_trace, bool) else list(keep_trace)
         t0 = time.perf_counter()
-        # The tick of every world (physics.tick.advance in three parts): torques
-        # commanded, the physics of all worlds in one pass, each world prepared.
+        # The tick of every world (physics.tick.advance in parts): torques commanded,
+        # the physics of all worlds in one pass, each world prepared, the vehicles'
+        # step in one pass.
         with PhysicsPass([run.world for run in runs], self.threads) as physics:
             for k in tqdm(range(self.steps), disable=not progress, desc="simulate",
                           leave=False, file=sys.stderr):
@@ -244,7 +252,9 @@ class ClosedLoop:
                 physics()
                 t_next = (k + 1) * Te
                 for run in runs:
-                    prepare(run.world, run.disturbances, t_next, run.vehicle)
+                    prepare(run.world, run.disturbances, t_next)
+                if self.vehicles is not None:
+                    self.vehicles.act_rows(t_next)
         wall = time.perf_counter() - t0
         times = np.arange(self.steps) * Te
         return [outcome(run.result(times), run.xhat, run.flags, self.cfg,

@@ -190,9 +190,22 @@ def summarize(cfg: RunConfig, outs: list[RunOutcome]) -> RunSummary:
         receiver_dome=cfg.receiver_dome)
 
 
-def _job(args) -> RunOutcome:
-    cfg, seed, keep = args
-    return run_batch(cfg, [seed], keep_trace=keep, window=cfg.window)[0]
+#: The most seeds one job steps together (a batch): larger batches gain little more,
+#: and the progress bar counts finished batches.
+MAX_BATCH = 16
+
+
+def _job(args) -> list[RunOutcome]:
+    cfg, seeds, keep = args
+    return run_batch(cfg, seeds, keep_trace=keep, window=cfg.window)
+
+
+def seed_batches(seeds: int, workers: int) -> list[list[int]]:
+    """Seeds 0..seeds-1 in consecutive batches, at least one per worker and none over
+    :data:`MAX_BATCH` seeds."""
+    n = max(min(workers, seeds), -(-seeds // MAX_BATCH), 1)
+    bounds = np.linspace(0, seeds, n + 1).round().astype(int)
+    return [list(range(a, b)) for a, b in zip(bounds[:-1], bounds[1:], strict=True) if b > a]
 
 
 def run_seeds(cfg: RunConfig, progress: bool = True, all_traces: bool = False
@@ -200,13 +213,17 @@ def run_seeds(cfg: RunConfig, progress: bool = True, all_traces: bool = False
     """Monte-Carlo over seeds 0..cfg.seeds-1: (summary, one :class:`RunOutcome` per
     seed, with its trace for seed 0, or for every seed with ``all_traces``).
 
-    Each seed is one job of the Monte-Carlo runner (the progress bar counts seeds),
-    through the one closed loop (:class:`~ledsim.loop.closed_loop.ClosedLoop`): a
-    seed's numbers do not depend on the number of workers."""
+    The seeds are stepped together in batches (:func:`seed_batches`), one job of the
+    Monte-Carlo runner each (the progress bar counts batches), through the one closed
+    loop (:class:`~ledsim.loop.closed_loop.ClosedLoop`): a seed's numbers do not depend
+    on its batch or on the number of workers."""
     cfg.validate()
     check_checkpoint(cfg)
-    jobs = [(cfg, s, all_traces or s == 0) for s in range(cfg.seeds)]
-    outs = run_jobs(_job, jobs, cfg.workers, f"{cfg.scenario}/{cfg.estimator}", progress)
+    jobs = [(cfg, b, [all_traces or s == 0 for s in b])
+            for b in seed_batches(cfg.seeds, cfg.workers)]
+    outs = [o for batch in run_jobs(_job, jobs, cfg.workers,
+                                    f"{cfg.scenario}/{cfg.estimator}", progress)
+            for o in batch]
     return summarize(cfg, outs), outs
 
 

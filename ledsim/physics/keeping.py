@@ -15,8 +15,10 @@ from dataclasses import dataclass, fields
 
 import numpy as np
 
-from observer.hull_loads import HullLoadObserver, soft_deadband
+from observer.hull_loads import HullLoadObserver
 from observer.ins import InsState
+from observer.rotations import libm_square, per_element
+from observer.rows import Rows
 
 from ..config import ConfigError, NavigationNoise
 from .world import LinkWorld
@@ -81,7 +83,7 @@ class StationKeeping:
                                   f"{'> 0 s' if timed else '>= 0'} and finite")
 
 
-class StationKeeper:
+class StationKeeper(Rows):
     """The station keeping of :class:`StationKeeping`'s gains on ``world``'s thrusters.
 
     Args:
@@ -91,23 +93,49 @@ class StationKeeper:
         noise: the IMU's noise figures (the load observer's noise).
         home: the station: horizontal position [m] (2,) and heading [rad].
         surface: the height of the depth sensor's zero [m].
+
+    Stacked (:class:`~observer.rows.Rows`), one keeper drives N hulls
+    (:meth:`act_rows`), each as its own would.
     """
+
+    ROW_ARRAYS = ("thrust", "_omega", "k", "home_position", "home_heading", "surface",
+                  "_mass")
+    ROW_LISTS = ("worlds",)
 
     def __init__(self, world: LinkWorld, Te: float, gains: StationKeeping,
                  noise: NavigationNoise, home: tuple[np.ndarray, float], surface: float):
-        self.world, self.Te, self.gains = world, Te, gains
-        self.home, self.surface = home, surface
-        self.mass = world.hull_inertia()  # surge, sway, heave [kg]; pitch, yaw [kg m^2]
-        self.loads = HullLoadObserver(Te, self.mass, noise.accel_noise_density,
+        self.single, self.n = True, 1
+        self.worlds, self.Te, self.gains = [world], Te, gains
+        self.home_position = np.asarray(home[0], dtype=float)[None].copy()
+        self.home_heading = np.array([float(home[1])])
+        self.surface = np.array([float(surface)])
+        mass = world.hull_inertia()  # surge, sway, heave [kg]; pitch, yaw [kg m^2]
+        self._mass = mass[None]  # the gimbal's pose at the start changes it a little
+        self.loads = HullLoadObserver(Te, mass, noise.accel_noise_density,
                                       noise.gyro_noise_density, gains.observer_time,
                                       gains.slow_observer_time, gains.load_deadband,
                                       limit=world.thrust_limits())
-        self.thrust = np.zeros(5)
-        self._omega = np.zeros(3)
-        self.k = 0
+        self.thrust = np.zeros((1, 5))
+        self._omega = np.zeros((1, 3))
+        self.k = np.zeros(1, dtype=np.int64)
         g = gains
         self._kp = np.array([g.kp, g.kp, g.kp, g.kp_pitch, g.kp_yaw])
         self._kd = np.array([g.kd, g.kd, g.kd, g.kd_pitch, g.kd_yaw])
+
+    @property
+    def mass(self) -> np.ndarray:
+        """The hull's mass [kg] and pitch and yaw inertia [kg m^2], (5,) ((N, 5))."""
+        return self._mass[0] if self.single else self._mass
+
+    @classmethod
+    def stacked(cls, items):
+        out = super().stacked(items)
+        out.loads = HullLoadObserver.stacked([i.loads for i in items])
+        return out
+
+    def put(self, row: int, item) -> None:
+        super().put(row, item)
+        self.loads.put(row, item.loads)
 
     def act(self, nav: InsState, covariance: np.ndarray, velocity: np.ndarray,
             omega: np.ndarray, a: np.ndarray) -> np.ndarray:
@@ -115,36 +143,60 @@ class StationKeeper:
         INS's, 15x15), the hull-frame ``velocity`` [m/s], the bias-corrected gyro
         ``omega`` [rad/s] and the hull-frame acceleration ``a`` [m/s^2]; returns the
         thrust applied [N, N m]."""
-        alpha = (omega - self._omega) / self.Te if self.k else np.zeros(3)
-        measured = self.mass * np.array([*a, alpha[1], alpha[2]]) - self.thrust
-        load = self.loads.update(measured)
-        self.thrust = self.world.set_thrust(
-            self._pd(nav, covariance, velocity, omega) - load)
+        rows = InsState(*(np.asarray(x)[None] for x in (
+            nav.position, nav.velocity, nav.attitude, nav.gyro_bias, nav.accel_bias)))
+        return self.act_rows(rows, np.asarray(covariance)[None], np.asarray(velocity)[None],
+                             np.asarray(omega)[None], np.asarray(a)[None])[0]
+
+    def act_rows(self, nav: InsState, P: np.ndarray, velocity: np.ndarray,
+                 omega: np.ndarray, a: np.ndarray) -> np.ndarray:
+        """:meth:`act` of every hull (each argument with a leading axis of N)."""
+        alpha = (omega - self._omega) / self.Te
+        if not self.k.all():  # a first step has no earlier rate
+            alpha = np.where(self.k[:, None] > 0, alpha, 0.0)
+        measured = self._mass * np.concatenate([a, alpha[:, 1:]], axis=1) - self.thrust
+        load = self.loads.update_rows(measured)
+        command = self._pd(nav, P, velocity, omega) - load
+        self.thrust = np.array([w.set_thrust(c) for w, c in zip(self.worlds, command,
+                                                                strict=True)])
         self._omega = omega
-        self.k += 1
+        self.k = self.k + 1
         return self.thrust
 
     def _pd(self, nav: InsState, P: np.ndarray, velocity: np.ndarray,
             omega: np.ndarray) -> np.ndarray:
         """Surge, sway, heave [N], pitch and yaw [N m] of the PD that holds the home pose
-        (hull frame)."""
-        g = self.gains
-        heading = nav.heading
-        c, s = math.cos(heading), math.sin(heading)
-        dp = nav.position[:2] - self.home[0]
-        err = np.array([c * dp[0] + s * dp[1], -s * dp[0] + c * dp[1],
-                        nav.position[2] - self.surface, nav.pitch,
-                        math.remainder(heading - self.home[1], 2 * math.pi)])
-        rate = np.array([*velocity, omega[1], omega[2]])
+        (hull frame), (N, 5)."""
+        g, att = self.gains, nav.attitude
+        heading = per_element(math.atan2, att[:, 1, 0], att[:, 0, 0])
+        pitch = per_element(math.asin, np.maximum(-1.0, np.minimum(1.0, -att[:, 2, 0])))
+        c, s = np.cos(heading), np.sin(heading)
+        dp = nav.position[:, :2] - self.home_position
+        yaw = per_element(math.remainder, heading - self.home_heading, 2 * math.pi)
+        err = np.array([c * dp[:, 0] + s * dp[:, 1], -s * dp[:, 0] + c * dp[:, 1],
+                        nav.position[:, 2] - self.surface, pitch, yaw]).T
+        rate = np.concatenate([velocity, omega[:, 1:]], axis=1)
         # Act only on what the navigation knows: the part of each error beyond
-        # `deadband` of its own standard deviations (the covariance of the INS).
-        k = g.deadband
-        e, v = err.tolist(), rate.tolist()
-        err[:2] *= soft_deadband(e[0]**2 + e[1]**2, 0.5 * float(P[0, 0] + P[1, 1]), k)
-        err[2] *= soft_deadband(e[2]**2, float(P[2, 2]), k)
-        err[3] *= soft_deadband(e[3]**2, float(P[7, 7]), k)
-        err[4] *= soft_deadband(e[4]**2, float(P[8, 8]), k)
-        k = g.velocity_deadband
-        rate[:2] *= soft_deadband(v[0]**2 + v[1]**2, 0.5 * float(P[3, 3] + P[4, 4]), k)
-        rate[2] *= soft_deadband(v[2]**2, float(P[5, 5]), k)
+        # `deadband` of its own standard deviations (the covariance of the INS), and of
+        # each velocity beyond `velocity_deadband` of its own.
+        e2, v2 = libm_square(err), libm_square(rate)
+        square = np.array([e2[:, 0] + e2[:, 1], e2[:, 2], e2[:, 3], e2[:, 4],
+                           v2[:, 0] + v2[:, 1], v2[:, 2]]).T
+        d = P[:, _DIAG, _DIAG]  # the variances of x, y, z, pitch, yaw, vx, vy, vz
+        variance = np.array([0.5 * (d[:, 0] + d[:, 1]), d[:, 2], d[:, 3], d[:, 4],
+                             0.5 * (d[:, 5] + d[:, 6]), d[:, 7]]).T
+        k = np.array([g.deadband] * 4 + [g.velocity_deadband] * 2)
+        # soft_deadband of each, as it computes one float (k = 0: all of it).
+        ratio = k * k * variance / np.maximum(square, 1e-300)
+        share = np.where((ratio >= 1.0) & (k > 0), 0.0, np.where(k > 0, 1.0 - ratio * ratio,
+                                                                  1.0))
+        err = err * share[:, _ERR_SHARE]
+        rate = rate * np.concatenate([share[:, _RATE_SHARE], np.ones((len(rate), 2))], axis=1)
         return -self._kp * err - self._kd * rate
+
+
+#: P's diagonal entries the deadbands read (x, y, z, pitch, yaw; vx, vy, vz), and which
+#: deadband scales each error and each of the first three rates.
+_DIAG = np.array([0, 1, 2, 7, 8, 3, 4, 5])
+_ERR_SHARE = np.array([0, 0, 1, 2, 3])
+_RATE_SHARE = np.array([4, 4, 5])

@@ -40,6 +40,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from observer.rotations import rotation_log
+from observer.rows import Rows
 
 from ..config import GRAVITY, NavigationNoise
 from .world import LinkWorld, WorldError
@@ -81,6 +82,19 @@ class NavigationReading:
     fix_time: float | None = None
     fix_std: float | None = None
 
+    def row(self, i: int) -> NavigationReading:
+        """Vehicle ``i``'s reading of one taken for N vehicles (NaN fixes as None)."""
+        fixed = not math.isnan(self.fix_time[i])
+        mag = self.magnetometer
+        return NavigationReading(
+            self.gyro[i], self.accel[i], self.dvl[i], float(self.encoder[i]),
+            self.position_fix[i] if fixed else None, float(self.depth[i]),
+            bool(self.dvl_fresh[i]), self.dvl_gyro[i], self.delta_angle[i],
+            self.delta_velocity[i], bool(self.dvl_valid[i]),
+            None if mag is None or math.isnan(mag[i, 0]) else mag[i],
+            float(self.fix_time[i]) if fixed else None,
+            float(self.fix_std[i]) if fixed else None)
+
 
 @dataclass(frozen=True)
 class SensorBiases:
@@ -91,7 +105,7 @@ class SensorBiases:
     accel: np.ndarray
 
 
-class NavigationSensor:
+class NavigationSensor(Rows):
     """The vehicle's sensors of ``world``, read once per control step ``Te`` [s].
 
     Args:
@@ -100,7 +114,15 @@ class NavigationSensor:
         Te: control period [s].
         seed: the run's seed.
         noise: the noise figures (None: :class:`~ledsim.config.NavigationNoise`'s).
+
+    :meth:`Rows.stacked` makes one sensor of several vehicles' (one per world, each with
+    its own generators): its :meth:`read_rows` reads them all, every row as its own
+    sensor would.
     """
+
+    ROW_ARRAYS = ("gyro_bias", "accel_bias", "k", "_outliers", "surface", "_dvl",
+                  "_has_dvl", "_dvl_gyro", "_attitude", "_velocity")
+    ROW_LISTS = ("worlds", "rngs", "fault_rngs", "_fix_queues")
 
     def __init__(self, world: LinkWorld, Te: float, seed: int = 0,
                  noise: NavigationNoise | None = None):
@@ -108,95 +130,151 @@ class NavigationSensor:
             raise WorldError(f"the scene lacks the vehicle's sensor"
                              f"{'s' if len(world.ids.missing_sensors) > 1 else ''} "
                              f"{', '.join(world.ids.missing_sensors)}: run it with --no-imu")
-        self.world = world
+        self.single, self.n = True, 1
+        self.worlds = [world]
         self.Te = Te
         self.noise = noise or NavigationNoise()
         n = self.noise
-        self.rng = np.random.default_rng(SEED_OFFSET + seed)
-        self.fault_rng = np.random.default_rng([SEED_OFFSET + seed, 1])  # fixes' faults
-        self._fixes: deque = deque()  # measured, not yet arrived: (arrival, time, fix, std)
-        self.biases = SensorBiases(np.zeros(3), np.zeros(3))  # of the last reading
-        self.outliers = 0  # fixes made outliers so far
+        self.rngs = [np.random.default_rng(SEED_OFFSET + seed)]
+        self.fault_rngs = [np.random.default_rng([SEED_OFFSET + seed, 1])]  # fixes' faults
+        # measured, not yet arrived: (arrival, time, fix, std)
+        self._fix_queues: list[deque] = [deque()]
+        self._biases = SensorBiases(np.zeros((1, 3)), np.zeros((1, 3)))  # the last reading's
+        self._outliers = np.zeros(1, dtype=int)  # fixes made outliers so far
         root_bandwidth = math.sqrt(1.0 / (2.0 * Te))
         self.gyro_std = n.gyro_noise_density * root_bandwidth
         self.accel_std = n.accel_noise_density * root_bandwidth
-        self.gyro_bias = self.rng.standard_normal(3) * n.gyro_bias_instability
-        self.accel_bias = self.rng.standard_normal(3) * n.accel_bias_instability
-        self._decay = (math.exp(-Te / n.gyro_bias_time), math.exp(-Te / n.accel_bias_time))
-        self.k = 0
-        self._dvl: np.ndarray | None = None
-        self.surface = float(world.vehicle_motion().position[2])  # depth 0: the start
-        self._attitude = world.hull_rotation  # for the delta angle and velocity
-        self._velocity = world.hull_velocity()[3:].copy()  # the IMU's, world frame
+        self.gyro_bias = self.rngs[0].standard_normal((1, 3)) * n.gyro_bias_instability
+        self.accel_bias = self.rngs[0].standard_normal((1, 3)) * n.accel_bias_instability
+        decay = (math.exp(-Te / n.gyro_bias_time), math.exp(-Te / n.accel_bias_time))
+        self._decay = decay
+        self._root = (math.sqrt(1 - decay[0]**2), math.sqrt(1 - decay[1]**2))
+        self.k = np.zeros(1, dtype=np.int64)
+        self._dvl, self._has_dvl = np.zeros((1, 3)), np.zeros(1, dtype=bool)
+        self._dvl_gyro = np.zeros((1, 3))
+        self.surface = np.array([float(world.vehicle_motion().position[2])])  # depth 0
+        self._attitude = world.hull_rotation[None]  # for the delta angle and velocity
+        self._velocity = world.hull_velocity()[3:].copy()[None]  # the IMU's, world frame
 
-    def _due(self, rate: float) -> bool:
-        """A measurement at ``rate`` [Hz] falls in this control step (step 0 included)."""
-        k = self.k
-        return k == 0 or math.floor(k * self.Te * rate + 1e-9) > \
-            math.floor((k - 1) * self.Te * rate + 1e-9)
+    @property
+    def world(self) -> LinkWorld:
+        return self.worlds[0]
 
-    def _drift(self, bias: np.ndarray, decay: float, spread: float) -> np.ndarray:
-        """One step of a Gauss-Markov bias with stationary spread ``spread``."""
-        return decay * bias + self.rng.standard_normal(3) * spread * math.sqrt(1 - decay**2)
+    @property
+    def rng(self) -> np.random.Generator:
+        return self.rngs[0]
+
+    @property
+    def biases(self) -> SensorBiases:
+        """The IMU's biases in the last reading (each (3,); (N, 3) for N vehicles)."""
+        b = self._biases
+        return SensorBiases(b.gyro[0], b.accel[0]) if self.single else b
+
+    @property
+    def outliers(self):
+        """Fixes made outliers so far (per vehicle for N)."""
+        return int(self._outliers[0]) if self.single else self._outliers
+
+    def _due(self, rate: float) -> np.ndarray:
+        """A measurement at ``rate`` [Hz] falls in this control step (step 0 included),
+        per vehicle (one test when all are at the same step, as they mostly are)."""
+        ks = self.k.tolist()
+        due = [k == 0 or math.floor(k * self.Te * rate + 1e-9)
+               > math.floor((k - 1) * self.Te * rate + 1e-9) for k in dict.fromkeys(ks)]
+        if len(due) == 1:
+            return np.ones(self.n, dtype=bool) if due[0] else np.zeros(self.n, dtype=bool)
+        table = dict(zip(dict.fromkeys(ks), due, strict=True))
+        return np.array([table[k] for k in ks])
 
     def read(self) -> NavigationReading:
         """The readings of this control step (the world's current state)."""
-        truth = self.world.vehicle_motion()
-        n, rng = self.noise, self.rng
-        gyro = truth.gyro + self.gyro_bias + rng.standard_normal(3) * self.gyro_std
-        attitude = self.world.hull_rotation
-        delta = rotation_log(self._attitude.T @ attitude) + self.Te * self.gyro_bias \
-            + rng.standard_normal(3) * n.gyro_noise_density * math.sqrt(self.Te)
+        r = self.read_rows()
+        return r.row(0) if self.single else r
+
+    def read_rows(self) -> NavigationReading:
+        """Every vehicle's readings, as one :class:`NavigationReading` with a leading
+        axis of N on each field (``position_fix``, ``fix_time``, ``fix_std``: NaN where
+        none arrived; ``magnetometer``: None when none was read)."""
+        n, Te, N = self.noise, self.Te, self.n
+        truths = [w.vehicle_motion() for w in self.worlds]
+        fresh = (self._due(n.dvl_rate) & np.array([w.dvl_bottom_lock for w in self.worlds])) \
+            | ~self._has_dvl
+        fix_due = self._due(n.fix_rate)
+        mag_due = self._due(n.magnetometer_rate) & (truths[0].magnetometer is not None)
+        # Each vehicle's draws in one call, in the order a reading has always taken them.
+        draws = [rng.standard_normal(18 + 3 * f + 3 * x + 1 + 3 * m) for rng, f, x, m in
+                 zip(self.rngs, fresh.tolist(), fix_due.tolist(), mag_due.tolist(),
+                     strict=True)]
+        white = np.array([d[:18] for d in draws]).reshape(N, 6, 3)
+        gyro_t = np.array([t.gyro for t in truths])
+        gyro = gyro_t + self.gyro_bias + white[:, 0] * self.gyro_std
+        attitude = np.array([w.hull_rotation for w in self.worlds])
+        root_te = math.sqrt(Te)
+        delta = rotation_log(self._attitude.swapaxes(1, 2) @ attitude) \
+            + Te * self.gyro_bias + white[:, 1] * n.gyro_noise_density * root_te
         self._attitude = attitude
-        velocity = self.world.hull_velocity()[3:].copy()
-        dv = attitude.T @ (velocity - self._velocity + self.Te * GRAVITY_REACTION) \
-            + self.Te * self.accel_bias \
-            + rng.standard_normal(3) * n.accel_noise_density * math.sqrt(self.Te)
+        velocity = np.array([w.hull_velocity()[3:] for w in self.worlds])
+        dv = (attitude.swapaxes(1, 2) @ (velocity - self._velocity + Te * GRAVITY_REACTION)
+              [..., None])[..., 0] + Te * self.accel_bias \
+            + white[:, 2] * n.accel_noise_density * root_te
         self._velocity = velocity
-        accel = truth.accel + self.accel_bias + rng.standard_normal(3) * self.accel_std
-        self.biases = SensorBiases(self.gyro_bias.copy(), self.accel_bias.copy())
-        self.gyro_bias = self._drift(self.gyro_bias, self._decay[0], n.gyro_bias_instability)
-        self.accel_bias = self._drift(self.accel_bias, self._decay[1],
-                                      n.accel_bias_instability)
-        lock = self.world.dvl_bottom_lock
-        fresh = (self._due(n.dvl_rate) and lock) or self._dvl is None
-        if fresh:
-            self._dvl = truth.dvl + rng.standard_normal(3) * n.dvl_noise
-            self._dvl_gyro = gyro.copy()
-        if self._due(n.fix_rate):
-            self._measure_fix(truth.position, rng.standard_normal(3))
-        fix, fix_time, fix_std = self._arrived()
+        accel = np.array([t.accel for t in truths]) + self.accel_bias + white[:, 3] * self.accel_std
+        self._biases = SensorBiases(self.gyro_bias.copy(), self.accel_bias.copy())
+        # Gauss-Markov biases of stationary spread the bias instability.
+        self.gyro_bias = self._decay[0] * self.gyro_bias \
+            + white[:, 4] * n.gyro_bias_instability * self._root[0]
+        self.accel_bias = self._decay[1] * self.accel_bias \
+            + white[:, 5] * n.accel_bias_instability * self._root[1]
+        fix = np.full((N, 3), np.nan)
+        fix_time, fix_std = np.full(N, np.nan), np.full(N, np.nan)
+        depth = np.empty(N)
+        mag = np.full((N, 3), np.nan) if mag_due.any() else None
+        for i, (t, d) in enumerate(zip(truths, draws, strict=True)):
+            at = 18
+            if fresh[i]:
+                self._dvl[i] = t.dvl + d[at:at + 3] * n.dvl_noise
+                self._dvl_gyro[i] = gyro[i]
+                self._has_dvl[i] = True
+                at += 3
+            if fix_due[i]:
+                self._measure_fix(i, t.position, d[at:at + 3])
+                at += 3
+            got = self._arrived(i)
+            if got[0] is not None:
+                fix[i], fix_time[i], fix_std[i] = got
+            depth[i] = self.surface[i] - t.position[2] + d[at] * n.depth_noise
+            if mag_due[i]:
+                mag[i] = t.magnetometer + d[at + 1:at + 4] * n.magnetometer_noise
         step = n.encoder_step
-        encoder = step * math.floor(truth.encoder / step + 0.5)
-        depth = self.surface - truth.position[2] + rng.standard_normal() * n.depth_noise
-        mag = None
-        if truth.magnetometer is not None and self._due(n.magnetometer_rate):
-            mag = truth.magnetometer + rng.standard_normal(3) * n.magnetometer_noise
-        self.k += 1
-        return NavigationReading(gyro, accel, self._dvl.copy(), encoder, fix, float(depth),
-                                 fresh and lock, self._dvl_gyro.copy(), delta, dv, lock, mag,
+        encoder = np.array([step * math.floor(t.encoder / step + 0.5) for t in truths])
+        lock = np.array([w.dvl_bottom_lock for w in self.worlds])
+        self.k = self.k + 1
+        return NavigationReading(gyro, accel, self._dvl.copy(), encoder, fix, depth,
+                                 fresh & lock, self._dvl_gyro.copy(), delta, dv, lock, mag,
                                  fix_time, fix_std)
 
-    def _measure_fix(self, position: np.ndarray, white: np.ndarray) -> None:
-        """A fix of ``position`` [m] measured now: its error grows with the range to the
-        transceiver, it may be an outlier, and it arrives ``fix_latency`` s later."""
-        n, t = self.noise, self.k * self.Te
-        r = self.world.usbl_range() or 0.0
+    def _measure_fix(self, i: int, position: np.ndarray, white: np.ndarray) -> None:
+        """A fix of vehicle ``i``'s ``position`` [m] measured now: its error grows with
+        the range to the transceiver, it may be an outlier, and it arrives
+        ``fix_latency`` s later."""
+        n, t = self.noise, int(self.k[i]) * self.Te
+        r = self.worlds[i].usbl_range() or 0.0
         std = math.hypot(n.fix_noise, n.fix_range_error * r)
         fix = position + white * std
         if n.fix_outlier_share > 0:
-            outlier = self.fault_rng.random() < n.fix_outlier_share
-            extra = self.fault_rng.standard_normal(3) * n.fix_outlier_size
+            faults = self.fault_rngs[i]
+            outlier = faults.random() < n.fix_outlier_share
+            extra = faults.standard_normal(3) * n.fix_outlier_size
             if outlier:
                 fix = fix + extra
-                self.outliers += 1
-        self._fixes.append((t + n.fix_latency, t, fix, std))
+                self._outliers[i] += 1
+        self._fix_queues[i].append((t + n.fix_latency, t, fix, std))
 
-    def _arrived(self) -> tuple[np.ndarray | None, float | None, float | None]:
-        """The fix that arrives this step (the latest, if several did), its measurement
-        time [s] and expected error [m]; Nones when none arrives."""
-        t, got = self.k * self.Te, (None, None, None)
-        while self._fixes and self._fixes[0][0] <= t + 1e-9:
-            _, measured, fix, std = self._fixes.popleft()
+    def _arrived(self, i: int) -> tuple[np.ndarray | None, float | None, float | None]:
+        """The fix of vehicle ``i`` that arrives this step (the latest, if several did),
+        its measurement time [s] and expected error [m]; Nones when none arrives."""
+        t, got, queue = int(self.k[i]) * self.Te, (None, None, None), self._fix_queues[i]
+        while queue and queue[0][0] <= t + 1e-9:
+            _, measured, fix, std = queue.popleft()
             got = (fix, measured, std)
         return got

@@ -30,6 +30,10 @@ Once per control step (:func:`ledsim.physics.tick.prepare`), :meth:`Vehicle.act`
    the MJCF). Each acts only on what stands out of its own noise (the INS's covariance,
    the IMU's figures): a hull in still water stays still. It never reads the true pose
    after the start.
+
+:meth:`Vehicle.stacked` makes one vehicle object of the vehicles of N worlds (each
+started as its own): :meth:`Vehicle.act_rows` then steps them all in one pass, each
+row's numbers those its own vehicle gives (:class:`~observer.rows.Rows`).
 """
 
 from __future__ import annotations
@@ -38,10 +42,13 @@ import math
 
 import numpy as np
 
-from observer.ins import AidedINS, InertialNoise, InsState
+from observer.ins import FIX_GATE, AidedINS, InertialNoise, InsState
 from observer.line_of_sight import LineOfSight, LineOfSightFilter
+from observer.rotations import per_element
+from observer.rows import Rows
 
 from ..config import GRAVITY, NavigationNoise
+from .batch import cross3
 from .keeping import StationKeeper, StationKeeping
 from .navigation import GRAVITY_REACTION, NavigationReading, NavigationSensor
 from .world import LinkWorld
@@ -57,13 +64,16 @@ def inertial_noise(n: NavigationNoise) -> InertialNoise:
                          n.magnetometer_noise)
 
 
-def _cross(a, b) -> np.ndarray:
-    """a x b of two 3-vectors (numpy's formula in plain floats: np.cross costs 30 us)."""
-    return np.array([a[1] * b[2] - a[2] * b[1], a[2] * b[0] - a[0] * b[2],
-                     a[0] * b[1] - a[1] * b[0]])
+def _T(a: np.ndarray) -> np.ndarray:
+    return a.swapaxes(-1, -2)
 
 
-class Vehicle:
+def _mv(A: np.ndarray, x: np.ndarray) -> np.ndarray:
+    """A @ x of each row (the matrix of one vehicle times its vector)."""
+    return (A @ x[..., None])[..., 0]
+
+
+class Vehicle(Rows):
     """The AUV's navigation and station keeping on ``world`` (see the module docstring).
 
     Args:
@@ -84,42 +94,88 @@ class Vehicle:
             0.61 s; the EKF's 0.761 -> 0.850.
     """
 
+    ROW_ARRAYS = ("l_gimbal", "led", "_bearing0", "_surface", "_home_position",
+                  "_home_heading")
+    ROW_LISTS = ("worlds",)
+    PARTS = ("sensor", "ins", "keeper", "sight")
+
     def __init__(self, world: LinkWorld, Te: float, seed: int, distance: float,
                  station_keeping: bool = True, noise: NavigationNoise | None = None,
                  gains: StationKeeping | None = None, rate_time: float = 0.05,
                  bearing_time: float = 2.0, reanchor_rate: float = 3.0,
                  reanchor_time: float = 1.0, reanchor_bearing_time: float = 0.2):
-        self.world, self.Te, self.distance = world, Te, distance
+        self.single, self.n = True, 1
+        self.worlds, self.Te, self.distance = [world], Te, distance
         self.sensor = NavigationSensor(world, Te, seed, noise)
         self.station_keeping = station_keeping and world.ids.thrusters is not None
         self.gains = gains = gains or StationKeeping()
         self.R_dvl, self.l_dvl = world.site_in_hull("dvl")
-        self.l_gimbal = world.gimbal_in_hull()
+        l_gimbal = world.gimbal_in_hull()
+        self.l_gimbal = l_gimbal[None]
         n = self.sensor.noise
         start = InsState(world.hull_pos.copy(), world.hull_velocity()[3:].copy(),
                          world.hull_rotation, np.zeros(3), np.zeros(3))
         magnetic = world.magnetic_field if world.ids.magnetometer is not None else None
         self.ins = AidedINS(Te, start, inertial_noise(n), GRAVITY, self.R_dvl, self.l_dvl,
                             magnetic, history=int(round(5.0 / Te)) + 2)
-        self.surface = world.hull_pos[2]  # the depth sensor's zero: the start's depth
-        self.home = (world.hull_pos[:2].copy(), world.hull_yaw)
-        self.keeper = StationKeeper(world, Te, gains, n, self.home, self.surface) \
+        surface = world.hull_pos[2]  # the depth sensor's zero: the start's depth
+        home = (world.hull_pos[:2].copy(), world.hull_yaw)
+        self._surface, self._home_position = np.array([surface]), home[0][None]
+        self._home_heading = np.array([home[1]])
+        self.keeper = StationKeeper(world, Te, gains, n, home, surface) \
             if self.station_keeping else None
-        self.reading: NavigationReading | None = None
+        self._reading: NavigationReading | None = None
         # The LOS rate's noise [rad/s] from the sensors' figures: the DVL's through the
         # navigation's velocity (about a ping's noise over the pings of 0.3 s), the
         # gyro's through the gimbal's lever arm, then the low-pass over rate_time.
         dvl = n.dvl_noise**2 / (2.0 * 0.3 * n.dvl_rate)
-        lever2 = float(self.l_gimbal[0]**2 + self.l_gimbal[1]**2)
+        lever2 = float(l_gimbal[0]**2 + l_gimbal[1]**2)
         gyro = n.gyro_noise_density**2 / (2 * Te) * lever2
         rate_noise = math.sqrt(dvl + gyro * Te / (2 * rate_time)) / distance
         self.sight = LineOfSightFilter(Te, distance, rate_noise, rate_time, bearing_time,
                                        reanchor_rate, reanchor_time, reanchor_bearing_time)
         # Where the start put the LED: d ahead of the hinge along the hull's axis.
         R0 = world.hull_rotation
-        hinge0 = world.hull_pos[:2] + (R0 @ self.l_gimbal)[:2]
-        self.led = hinge0 + distance * R0[:2, 0] / np.linalg.norm(R0[:2, 0])
-        self._bearing0 = self._led_in_hull(self.ins.state)[0]
+        hinge0 = world.hull_pos[:2] + (R0 @ l_gimbal)[:2]
+        self.led = (hinge0 + distance * R0[:2, 0] / np.linalg.norm(R0[:2, 0]))[None]
+        self._bearing0 = np.zeros(1)
+        self._bearing0 = self._led_bearing(self.ins.states)
+
+    @classmethod
+    def stacked(cls, items):
+        out = super().stacked(items)
+        for part in cls.PARTS:
+            parts = [getattr(i, part) for i in items]
+            setattr(out, part, None if parts[0] is None else type(parts[0]).stacked(parts))
+        out._reading = None
+        return out
+
+    def put(self, row: int, item) -> None:
+        super().put(row, item)
+        for part in self.PARTS:
+            if getattr(self, part) is not None:
+                getattr(self, part).put(row, getattr(item, part))
+
+    # -- one vehicle's view ------------------------------------------------------------------
+
+    @property
+    def world(self) -> LinkWorld:
+        return self.worlds[0]
+
+    @property
+    def reading(self) -> NavigationReading | None:
+        """The (first) vehicle's readings at its last step."""
+        r = self._reading
+        return None if r is None or not self.single else r.row(0)
+
+    @property
+    def surface(self) -> float:
+        return float(self._surface[0])
+
+    @property
+    def home(self) -> tuple[np.ndarray, float]:
+        """The station: horizontal position [m] (2,) and heading [rad]."""
+        return self._home_position[0], float(self._home_heading[0])
 
     @property
     def navigation(self) -> InsState:
@@ -132,47 +188,98 @@ class Vehicle:
         s = self.ins.state
         return s.attitude.T @ s.velocity
 
-    def navigate(self, r: NavigationReading, t: float) -> InsState:
-        """Feed the INS this step's readings ``r`` at time ``t`` [s]."""
-        ins = self.ins
-        ins.propagate(r.delta_angle, r.delta_velocity)
-        if r.dvl_fresh:
-            ins.update_dvl(r.dvl, r.dvl_gyro)
-        ins.update_depth(r.depth, self.surface)
-        if r.magnetometer is not None:
-            ins.update_magnetometer(r.magnetometer)
-        if r.position_fix is not None:
-            ins.update_position(r.position_fix, r.fix_std, delay=t - r.fix_time)
-        return ins.state
-
-    def act(self, t: float) -> LineOfSight:
-        """Sense, navigate, measure the line of sight and drive the thrusters at ``t``."""
-        r = self.reading = self.sensor.read()
-        nav = self.navigate(r, t)
-        omega = r.gyro - nav.gyro_bias
-        # a: the mean acceleration over the step, hull frame [m/s^2]: the velocity
-        # increment less its bias and gravity's reaction.
-        a = r.delta_velocity / self.Te - nav.accel_bias \
-            - nav.attitude.T @ GRAVITY_REACTION
-        velocity = self.velocity
-        v_g = velocity + _cross(omega, self.l_gimbal)
-        nav_bearing = self._led_in_hull(nav)[0] - self._bearing0
-        self.sight.update(v_g, r.encoder, float(omega[2]), nav_bearing)
-        if self.keeper is not None:
-            self.keeper.act(nav, self.ins.P, velocity, omega, a)
-        return self.los
-
     @property
     def los(self) -> LineOfSight:
         """What the vehicle measured of the line of sight at its last step."""
         return self.sight.los
 
-    def _led_in_hull(self, nav: InsState) -> tuple[float, float]:
-        """Where the LED is from the gimbal's hinge, by the navigated pose: its bearing
-        in the hull's frame [rad] and its range [m] (the LED where the start put it)."""
-        heading = nav.heading
-        c, s = math.cos(heading), math.sin(heading)
-        lx, ly = self.l_gimbal[0], self.l_gimbal[1]
-        dx = self.led[0] - (nav.position[0] + c * lx - s * ly)
-        dy = self.led[1] - (nav.position[1] + s * lx + c * ly)
-        return math.remainder(math.atan2(dy, dx) - heading, 2 * math.pi), math.hypot(dx, dy)
+    def row(self, i: int) -> VehicleRow:
+        """Vehicle ``i`` of a stacked vehicle, as one run reads it."""
+        return VehicleRow(self, i)
+
+    # -- the step ----------------------------------------------------------------------------
+
+    def act(self, t: float) -> LineOfSight | None:
+        """Sense, navigate, measure the line of sight and drive the thrusters at ``t``
+        [s] (every vehicle of a stacked one); the (first) vehicle's line of sight."""
+        self.act_rows(t)
+        return self.los if self.single else None
+
+    def act_rows(self, t) -> None:
+        """One step of every vehicle at ``t`` [s] (one time, or one per vehicle)."""
+        r = self._reading = self.sensor.read_rows()
+        ins = self.ins
+        ins.propagate_rows(r.delta_angle, r.delta_velocity)
+        if r.dvl_fresh.any():
+            rows = np.flatnonzero(r.dvl_fresh)
+            ins.dvl_rows(rows, r.dvl[rows], r.dvl_gyro[rows])
+        ins.depth_rows(r.depth, self._surface)
+        if r.magnetometer is not None:
+            rows = np.flatnonzero(~np.isnan(r.magnetometer[:, 0]))
+            ins.magnetometer_rows(rows, r.magnetometer[rows])
+        if not np.isnan(r.fix_time).all():
+            rows = np.flatnonzero(~np.isnan(r.fix_time))
+            now = t[rows] if np.ndim(t) else t
+            ins.position_rows(rows, r.position_fix[rows], r.fix_std[rows],
+                              now - r.fix_time[rows], FIX_GATE)
+        nav = ins.states
+        omega = r.gyro - nav.gyro_bias
+        # a: the mean acceleration over the step, hull frame [m/s^2]: the velocity
+        # increment less its bias and gravity's reaction.
+        att_T = _T(nav.attitude)
+        a = r.delta_velocity / self.Te - nav.accel_bias \
+            - _mv(att_T, np.broadcast_to(GRAVITY_REACTION, omega.shape))
+        velocity = _mv(att_T, nav.velocity)
+        v_g = velocity + cross3(omega, self.l_gimbal)
+        nav_bearing = self._led_bearing(nav) - self._bearing0
+        self.sight.update_rows(v_g, r.encoder, omega[:, 2], nav_bearing)
+        if self.keeper is not None:
+            self.keeper.act_rows(nav, ins.Ps, velocity, omega, a)
+
+    def _led_bearing(self, nav: InsState) -> np.ndarray:
+        """The LED's bearing from the gimbal's hinge in the hull's frame [rad] by the
+        navigated pose (the LED where the start put it), per vehicle."""
+        att = nav.attitude
+        heading = per_element(math.atan2, att[:, 1, 0], att[:, 0, 0])
+        c, s = np.cos(heading), np.sin(heading)
+        lx, ly = self.l_gimbal[:, 0], self.l_gimbal[:, 1]
+        dx = self.led[:, 0] - (nav.position[:, 0] + c * lx - s * ly)
+        dy = self.led[:, 1] - (nav.position[:, 1] + s * lx + c * ly)
+        return per_element(math.remainder, per_element(math.atan2, dy, dx) - heading,
+                           2 * math.pi)
+
+
+class VehicleRow:
+    """Vehicle ``i`` of a stacked :class:`Vehicle`: what one run reads of it (its
+    navigation, line of sight, station)."""
+
+    def __init__(self, vehicles: Vehicle, i: int):
+        self.vehicles, self.i = vehicles, i
+
+    @property
+    def station_keeping(self) -> bool:
+        return self.vehicles.station_keeping
+
+    @property
+    def surface(self) -> float:
+        return float(self.vehicles._surface[self.i])
+
+    @property
+    def home(self) -> tuple[np.ndarray, float]:
+        v = self.vehicles
+        return v._home_position[self.i], float(v._home_heading[self.i])
+
+    @property
+    def navigation(self) -> InsState:
+        s, i = self.vehicles.ins.states, self.i
+        return InsState(s.position[i], s.velocity[i], s.attitude[i], s.gyro_bias[i],
+                        s.accel_bias[i])
+
+    @property
+    def los(self) -> LineOfSight:
+        return self.vehicles.sight.los_of(self.i)
+
+    @property
+    def reading(self) -> NavigationReading | None:
+        r = self.vehicles._reading
+        return None if r is None else r.row(self.i)
