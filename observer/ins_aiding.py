@@ -57,6 +57,11 @@ class InsAiding:
     def _inject_rows(self, rows, dx: np.ndarray) -> None:
         # New arrays, not writes into the old: an estimate read before stays as it was.
         s = self.states
+        if isinstance(rows, slice) and rows == slice(None):
+            s.position, s.velocity = s.position + dx[:, P], s.velocity + dx[:, V]
+            s.attitude = s.attitude @ rotation_exp(dx[:, TH])
+            s.gyro_bias, s.accel_bias = s.gyro_bias + dx[:, BG], s.accel_bias + dx[:, BA]
+            return
         for name, part in (("position", P), ("velocity", V), ("gyro_bias", BG),
                            ("accel_bias", BA)):
             x = getattr(s, name).copy()
@@ -97,7 +102,7 @@ class InsAiding:
         if self.field is None:
             raise ValueError("this INS has no magnetic field to compare a reading with")
         att = self.states.attitude[rows]
-        predicted = _mv(_T(att), np.broadcast_to(self.field, (len(rows), 3)))
+        predicted = _T(att) @ self.field
         H = np.zeros((len(rows), 3, N_ERROR))
         H[:, :, TH] = skew(predicted)
         Rm = np.eye(3) * self.noise.magnetometer_noise**2

@@ -24,7 +24,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from .rotations import libm_square, per_element
+from .rowops import columns, ops
 from .rows import Rows
 
 
@@ -110,21 +110,37 @@ class LineOfSightFilter(Rows):
     def update_rows(self, v_gimbal: np.ndarray, encoder: np.ndarray, hull_rate: np.ndarray,
                     nav_bearing: np.ndarray) -> None:
         """:meth:`update` of every vehicle: (N, 3), (N,), (N,), (N,)."""
-        c, s = np.cos(encoder), np.sin(encoder)
-        raw = (-c * v_gimbal[:, 1] + s * v_gimbal[:, 0]) / self.distance
-        self._raw = self._raw + self.k_rate * (raw - self._raw)
-        self._power = self._power + self.k_power * (libm_square(self._raw) - self._power)
-        rate = self._raw * np.maximum(0.0, 1.0 - self._noise_power
-                                      / np.maximum(self._power, 1e-30))
-        accel = np.where(self.k > 0, (rate - self.rate) / self.Te, 0.0)
-        bearing = self.bearing + self.Te * (rate - hull_rate)
-        self._anchor = np.where(np.abs(raw) > self.reanchor_rate, self.reanchor_time,
-                                self._anchor)
-        pulled = self._anchor > 0
-        k = np.where(pulled, self.k_reanchor, self.k_bearing)
-        self._anchor = np.where(pulled, self._anchor - self.Te, self._anchor)
-        bearing = bearing + k * per_element(math.remainder, nav_bearing - bearing,
-                                            2 * math.pi)
-        self.rate, self.acceleration, self.hull_rate, self.bearing = \
-            rate, accel, np.asarray(hull_rate, dtype=float).copy(), bearing
+        n = self.n
+        state = (self._raw, self._power, self.rate, self.bearing, self._anchor)
+        new = _step(ops(n), self, *columns(n, *state, self.k > 0, v_gimbal[:, 0],
+                                           v_gimbal[:, 1], encoder, hull_rate, nav_bearing,
+                                           self._noise_power))
+        if n == 1:  # in place: no one holds these arrays
+            for arr, value in zip((*state, self.acceleration, self.hull_rate),
+                                  new, strict=True):
+                arr[0] = value
+            self.k[0] += 1
+            return
+        self._raw, self._power, self.rate, self.bearing, self._anchor, \
+            self.acceleration, self.hull_rate = new
         self.k = self.k + 1
+
+
+def _step(o, f: LineOfSightFilter, raw, power, rate, bearing, anchor, started, vx, vy,
+          encoder, hull_rate, nav_bearing, noise_power):
+    """One step of the filter's state, each argument a float (one vehicle) or a column
+    of N (``o``: :mod:`observer.rowops`); returns the new (raw, power, rate, bearing,
+    anchor, acceleration, hull rate)."""
+    c, s = o.cos(encoder), o.sin(encoder)
+    w = (-c * vy + s * vx) / f.distance
+    raw = raw + f.k_rate * (w - raw)
+    power = power + f.k_power * (o.square(raw) - power)
+    new_rate = raw * o.maximum(0.0, 1.0 - noise_power / o.maximum(power, 1e-30))
+    accel = o.where(started, (new_rate - rate) / f.Te, 0.0)
+    bearing = bearing + f.Te * (new_rate - hull_rate)
+    anchor = o.where(o.abs(w) > f.reanchor_rate, f.reanchor_time, anchor)
+    pulled = anchor > 0
+    k = o.where(pulled, f.k_reanchor, f.k_bearing)
+    anchor = o.where(pulled, anchor - f.Te, anchor)
+    bearing = bearing + k * o.remainder(nav_bearing - bearing, 2 * math.pi)
+    return raw, power, new_rate, bearing, anchor, accel, hull_rate * 1.0

@@ -54,6 +54,8 @@ def rotation_exp(phi) -> np.ndarray:
     """Exp(phi): the rotation matrix of the rotation vector ``phi`` [rad] (Rodrigues);
     (..., 3) -> (..., 3, 3)."""
     phi = np.asarray(phi, dtype=float)
+    if phi.size == 3:  # one vector: Rodrigues in floats (the same operations)
+        return _exp_one(phi.reshape(3)).reshape(phi.shape[:-1] + (3, 3))
     sq = libm_square(phi)
     angle = np.sqrt(sq[..., 0] + sq[..., 1] + sq[..., 2])[..., None, None]
     K = skew(phi)
@@ -70,6 +72,8 @@ def rotation_log(R: np.ndarray) -> np.ndarray:
     """The rotation vector (axis times angle) [rad] of a rotation matrix;
     (..., 3, 3) -> (..., 3)."""
     R = np.asarray(R, dtype=float)
+    if R.size == 9:  # one matrix: in floats (the same operations)
+        return _log_one(R.reshape(3, 3)).reshape(R.shape[:-2] + (3,))
     trace = R[..., 0, 0] + R[..., 1, 1] + R[..., 2, 2]
     angle = per_element(math.acos, np.maximum(-1.0, np.minimum(1.0, 0.5 * (trace - 1.0))))
     angle = angle[..., None]
@@ -81,3 +85,20 @@ def rotation_log(R: np.ndarray) -> np.ndarray:
     safe = np.where(small, 1.0, angle) if small.any() else angle
     big = axis * safe / (2.0 * np.sin(safe))
     return np.where(small, 0.5 * axis, big) if small.any() else big
+
+
+def _exp_one(phi: np.ndarray) -> np.ndarray:
+    angle = math.sqrt(float(phi[0] ** 2 + phi[1] ** 2 + phi[2] ** 2))
+    K = skew(phi)
+    if angle < 1e-9:
+        return np.eye(3) + K + 0.5 * K @ K
+    return np.eye(3) + (math.sin(angle) / angle) * K \
+        + ((1.0 - math.cos(angle)) / angle**2) * K @ K
+
+
+def _log_one(R: np.ndarray) -> np.ndarray:
+    angle = math.acos(max(-1.0, min(1.0, 0.5 * (float(R[0, 0] + R[1, 1] + R[2, 2]) - 1.0))))
+    axis = np.array([R[2, 1] - R[1, 2], R[0, 2] - R[2, 0], R[1, 0] - R[0, 1]])
+    if angle < 1e-9:
+        return 0.5 * axis
+    return axis * angle / (2.0 * math.sin(angle))

@@ -63,10 +63,20 @@ class HullAccess:
         """Command the hull's surge, sway and heave thrust [N] and pitch and yaw torque
         [N m] (hull frame), each clipped at its thruster's limit. Returns what was
         applied."""
-        ids, m = self.ids.thrusters, self.model
-        lo, hi = m.actuator_ctrlrange[list(ids)].T
-        self.data.ctrl[list(ids)] = np.clip(np.asarray(command, dtype=float), lo, hi)
-        return self.thrust
+        ids, lo, hi = self._thruster_range()
+        ctrl = self.data.ctrl
+        ctrl[ids] = np.clip(np.asarray(command, dtype=float), lo, hi)
+        return ctrl[ids]
+
+    def _thruster_range(self) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """(actuator ids, lower limits, upper limits) of the thrusters (the model's
+        ``ctrlrange``, read once)."""
+        cached = getattr(self, "_thrusters_cached", None)
+        if cached is None or cached[3] is not self.model:
+            ids = np.array(self.ids.thrusters)
+            lo, hi = self.model.actuator_ctrlrange[ids].T.copy()
+            cached = self._thrusters_cached = (ids, lo, hi, self.model)
+        return cached[:3]
 
     def thrust_limits(self) -> np.ndarray:
         """The thrusters' limits: surge, sway, heave [N], pitch and yaw [N m] (their

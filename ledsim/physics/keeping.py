@@ -17,7 +17,7 @@ import numpy as np
 
 from observer.hull_loads import HullLoadObserver
 from observer.ins import InsState
-from observer.rotations import libm_square, per_element
+from observer.rowops import columns, ops
 from observer.rows import Rows
 
 from ..config import ConfigError, NavigationNoise
@@ -167,36 +167,48 @@ class StationKeeper(Rows):
             omega: np.ndarray) -> np.ndarray:
         """Surge, sway, heave [N], pitch and yaw [N m] of the PD that holds the home pose
         (hull frame), (N, 5)."""
-        g, att = self.gains, nav.attitude
-        heading = per_element(math.atan2, att[:, 1, 0], att[:, 0, 0])
-        pitch = per_element(math.asin, np.maximum(-1.0, np.minimum(1.0, -att[:, 2, 0])))
-        c, s = np.cos(heading), np.sin(heading)
-        dp = nav.position[:, :2] - self.home_position
-        yaw = per_element(math.remainder, heading - self.home_heading, 2 * math.pi)
-        err = np.array([c * dp[:, 0] + s * dp[:, 1], -s * dp[:, 0] + c * dp[:, 1],
-                        nav.position[:, 2] - self.surface, pitch, yaw]).T
-        rate = np.concatenate([velocity, omega[:, 1:]], axis=1)
-        # Act only on what the navigation knows: the part of each error beyond
-        # `deadband` of its own standard deviations (the covariance of the INS), and of
-        # each velocity beyond `velocity_deadband` of its own.
-        e2, v2 = libm_square(err), libm_square(rate)
-        square = np.array([e2[:, 0] + e2[:, 1], e2[:, 2], e2[:, 3], e2[:, 4],
-                           v2[:, 0] + v2[:, 1], v2[:, 2]]).T
+        n, att, pos = self.n, nav.attitude, nav.position
         d = P[:, _DIAG, _DIAG]  # the variances of x, y, z, pitch, yaw, vx, vy, vz
-        variance = np.array([0.5 * (d[:, 0] + d[:, 1]), d[:, 2], d[:, 3], d[:, 4],
-                             0.5 * (d[:, 5] + d[:, 6]), d[:, 7]]).T
-        k = np.array([g.deadband] * 4 + [g.velocity_deadband] * 2)
-        # soft_deadband of each, as it computes one float (k = 0: all of it).
-        ratio = k * k * variance / np.maximum(square, 1e-300)
-        share = np.where((ratio >= 1.0) & (k > 0), 0.0, np.where(k > 0, 1.0 - ratio * ratio,
-                                                                  1.0))
-        err = err * share[:, _ERR_SHARE]
-        rate = rate * np.concatenate([share[:, _RATE_SHARE], np.ones((len(rate), 2))], axis=1)
-        return -self._kp * err - self._kd * rate
+        cols = columns(n, att[:, 1, 0], att[:, 0, 0], att[:, 2, 0], pos[:, 0], pos[:, 1],
+                       pos[:, 2], self.home_position[:, 0], self.home_position[:, 1],
+                       self.home_heading, self.surface, *d.T, *velocity.T, omega[:, 1],
+                       omega[:, 2])
+        out = _pd_terms(ops(n), self.gains, self._kp, self._kd, *cols)
+        return np.array([out]) if n == 1 else np.array(out).T
 
 
-#: P's diagonal entries the deadbands read (x, y, z, pitch, yaw; vx, vy, vz), and which
-#: deadband scales each error and each of the first three rates.
+#: P's diagonal entries the deadbands read (x, y, z, pitch, yaw; vx, vy, vz).
 _DIAG = np.array([0, 1, 2, 7, 8, 3, 4, 5])
-_ERR_SHARE = np.array([0, 0, 1, 2, 3])
-_RATE_SHARE = np.array([4, 4, 5])
+
+
+def _pd_terms(o, g: StationKeeping, kp, kd, r10, r00, r20, px, py, pz, hx, hy, heading0,
+              surface, vx_, vy_, vz_, vpitch, vyaw, vvx, vvy, vvz, ux, uy, uz, wy, wz):
+    """The PD's five terms of one hull (floats) or of N (columns), ``o`` the arithmetic
+    (:mod:`observer.rowops`): the navigated pose's error from home, each error and
+    velocity shrunk by its soft deadband (the part beyond ``deadband`` of the
+    navigation's own standard deviations: ``max(0, 1 - (k^2 var / e^2)^2)``)."""
+    heading = o.atan2(r10, r00)
+    pitch = o.asin(o.maximum(-1.0, o.minimum(1.0, -r20)))
+    c, s = o.cos(heading), o.sin(heading)
+    dx, dy = px - hx, py - hy
+    err = [c * dx + s * dy, -s * dx + c * dy, pz - surface, pitch,
+           o.remainder(heading - heading0, 2 * math.pi)]
+    rate = [ux, uy, uz, wy, wz]
+    k, kv = g.deadband, g.velocity_deadband
+    e2 = [o.square(e) for e in err]
+    v2 = [o.square(v) for v in rate[:3]]
+    share = [_soft(o, e2[0] + e2[1], 0.5 * (vx_ + vy_), k), _soft(o, e2[2], vz_, k),
+             _soft(o, e2[3], vpitch, k), _soft(o, e2[4], vyaw, k)]
+    vshare = [_soft(o, v2[0] + v2[1], 0.5 * (vvx + vvy), kv), _soft(o, v2[2], vvz, kv)]
+    err = [err[0] * share[0], err[1] * share[0], err[2] * share[1], err[3] * share[2],
+           err[4] * share[3]]
+    rate = [rate[0] * vshare[0], rate[1] * vshare[0], rate[2] * vshare[1], rate[3], rate[4]]
+    return [-kp[i] * err[i] - kd[i] * rate[i] for i in range(5)]
+
+
+def _soft(o, square, variance, k: float):
+    """:func:`~observer.hull_loads.soft_deadband` of one float or of a column."""
+    if not k:
+        return 1.0
+    ratio = k * k * variance / o.maximum(square, 1e-300)
+    return o.where(ratio >= 1.0, 0.0, 1.0 - ratio * ratio)

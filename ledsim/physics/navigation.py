@@ -177,14 +177,10 @@ class NavigationSensor(Rows):
 
     def _due(self, rate: float) -> np.ndarray:
         """A measurement at ``rate`` [Hz] falls in this control step (step 0 included),
-        per vehicle (one test when all are at the same step, as they mostly are)."""
-        ks = self.k.tolist()
-        due = [k == 0 or math.floor(k * self.Te * rate + 1e-9)
-               > math.floor((k - 1) * self.Te * rate + 1e-9) for k in dict.fromkeys(ks)]
-        if len(due) == 1:
-            return np.ones(self.n, dtype=bool) if due[0] else np.zeros(self.n, dtype=bool)
-        table = dict(zip(dict.fromkeys(ks), due, strict=True))
-        return np.array([table[k] for k in ks])
+        per vehicle."""
+        return np.array([k == 0 or math.floor(k * self.Te * rate + 1e-9)
+                         > math.floor((k - 1) * self.Te * rate + 1e-9)
+                         for k in self.k.tolist()])
 
     def read(self) -> NavigationReading:
         """The readings of this control step (the world's current state)."""
@@ -197,8 +193,8 @@ class NavigationSensor(Rows):
         none arrived; ``magnetometer``: None when none was read)."""
         n, Te, N = self.noise, self.Te, self.n
         truths = [w.vehicle_motion() for w in self.worlds]
-        fresh = (self._due(n.dvl_rate) & np.array([w.dvl_bottom_lock for w in self.worlds])) \
-            | ~self._has_dvl
+        lock = np.array([w.dvl_bottom_lock for w in self.worlds])
+        fresh = (self._due(n.dvl_rate) & lock) | ~self._has_dvl
         fix_due = self._due(n.fix_rate)
         mag_due = self._due(n.magnetometer_rate) & (truths[0].magnetometer is not None)
         # Each vehicle's draws in one call, in the order a reading has always taken them.
@@ -225,10 +221,14 @@ class NavigationSensor(Rows):
             + white[:, 4] * n.gyro_bias_instability * self._root[0]
         self.accel_bias = self._decay[1] * self.accel_bias \
             + white[:, 5] * n.accel_bias_instability * self._root[1]
-        fix = np.full((N, 3), np.nan)
-        fix_time, fix_std = np.full(N, np.nan), np.full(N, np.nan)
+        fix, fix_time, fix_std = np.empty((N, 3)), np.empty(N), np.empty(N)
+        for a in (fix, fix_time, fix_std):
+            a.fill(np.nan)
         depth = np.empty(N)
-        mag = np.full((N, 3), np.nan) if mag_due.any() else None
+        mag = None
+        if mag_due.any():
+            mag = np.empty((N, 3))
+            mag.fill(np.nan)
         for i, (t, d) in enumerate(zip(truths, draws, strict=True)):
             at = 18
             if fresh[i]:
@@ -247,7 +247,6 @@ class NavigationSensor(Rows):
                 mag[i] = t.magnetometer + d[at + 1:at + 4] * n.magnetometer_noise
         step = n.encoder_step
         encoder = np.array([step * math.floor(t.encoder / step + 0.5) for t in truths])
-        lock = np.array([w.dvl_bottom_lock for w in self.worlds])
         self.k = self.k + 1
         return NavigationReading(gyro, accel, self._dvl.copy(), encoder, fix, depth,
                                  fresh & lock, self._dvl_gyro.copy(), delta, dv, lock, mag,

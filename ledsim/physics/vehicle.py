@@ -44,7 +44,7 @@ import numpy as np
 
 from observer.ins import FIX_GATE, AidedINS, InertialNoise, InsState
 from observer.line_of_sight import LineOfSight, LineOfSightFilter
-from observer.rotations import per_element
+from observer.rowops import columns, ops
 from observer.rows import Rows
 
 from ..config import GRAVITY, NavigationNoise
@@ -227,8 +227,7 @@ class Vehicle(Rows):
         # a: the mean acceleration over the step, hull frame [m/s^2]: the velocity
         # increment less its bias and gravity's reaction.
         att_T = _T(nav.attitude)
-        a = r.delta_velocity / self.Te - nav.accel_bias \
-            - _mv(att_T, np.broadcast_to(GRAVITY_REACTION, omega.shape))
+        a = r.delta_velocity / self.Te - nav.accel_bias - att_T @ GRAVITY_REACTION
         velocity = _mv(att_T, nav.velocity)
         v_g = velocity + cross3(omega, self.l_gimbal)
         nav_bearing = self._led_bearing(nav) - self._bearing0
@@ -239,14 +238,17 @@ class Vehicle(Rows):
     def _led_bearing(self, nav: InsState) -> np.ndarray:
         """The LED's bearing from the gimbal's hinge in the hull's frame [rad] by the
         navigated pose (the LED where the start put it), per vehicle."""
-        att = nav.attitude
-        heading = per_element(math.atan2, att[:, 1, 0], att[:, 0, 0])
-        c, s = np.cos(heading), np.sin(heading)
-        lx, ly = self.l_gimbal[:, 0], self.l_gimbal[:, 1]
-        dx = self.led[:, 0] - (nav.position[:, 0] + c * lx - s * ly)
-        dy = self.led[:, 1] - (nav.position[:, 1] + s * lx + c * ly)
-        return per_element(math.remainder, per_element(math.atan2, dy, dx) - heading,
-                           2 * math.pi)
+        att, n = nav.attitude, self.n
+        o = ops(n)
+        r10, r00, px, py, lx, ly, ledx, ledy = columns(
+            n, att[:, 1, 0], att[:, 0, 0], nav.position[:, 0], nav.position[:, 1],
+            self.l_gimbal[:, 0], self.l_gimbal[:, 1], self.led[:, 0], self.led[:, 1])
+        heading = o.atan2(r10, r00)
+        c, s = o.cos(heading), o.sin(heading)
+        dx = ledx - (px + c * lx - s * ly)
+        dy = ledy - (py + s * lx + c * ly)
+        bearing = o.remainder(o.atan2(dy, dx) - heading, 2 * math.pi)
+        return np.array([bearing]) if n == 1 else bearing
 
 
 class VehicleRow:
