@@ -389,6 +389,7 @@ def main() -> None:
                      ("kkl", True)):
         for threads in (1, 2):
             batch_rows[est, sup, threads] = batched_speed(n_batch, threads, est, sup)
+    big = batched_speed(64, 1, "kkl", True, seconds=1.0)
     lines += ["", f"## Many seeds stepped together ({n_batch} worlds, align scenario, 2 s)",
               "", "`ledsim.loop.closed_loop.ClosedLoop`: each seed runs the one control step "
               "(its own sensor, gate, supervisor, estimator and law: every seed's numbers "
@@ -402,13 +403,17 @@ def main() -> None:
     for (est, sup, threads), (b, r) in batch_rows.items():
         lines.append(f"| {est} | {'on' if sup else 'off'} | {threads} | {b:.3g} | {r:.3g} "
                      f"| {b / r:.2f} |")
+    lines.append(f"| kkl (64 worlds, 1 s) | on | 1 | {big[0]:.3g} | {big[1]:.3g} "
+                 f"| {big[0] / big[1]:.2f} |")
     head_b, head_r = batch_rows["kkl", False, 1]
-    lines += ["", "Only the physics runs in parallel: the sensor, the supervisor and the "
-              "estimator of every seed are Python under the GIL, so two threads gain "
-              "little. The estimators are not vectorised over seeds: doing so changed a "
-              "seed's numbers with the batch it ran in (round-off that a chaotic run "
-              "grows to radians), and the same command gave different numbers for "
-              "different `--workers`."]
+    lines += ["", "The vehicles of all seeds (navigation sensors, aided INS, station "
+              "keeping, line of sight) are stepped in one pass over their rows "
+              "(`ledsim.physics.vehicle.Vehicle.stacked`), every row bit for bit its own "
+              "vehicle's. The sensor, the supervisor and the estimator of each seed are "
+              "still stepped one seed at a time, in Python under the GIL, so two threads "
+              "gain little; they are most of a step. `docs/bench_batch.md` "
+              "(`scripts/bench_batch.py`) measures these figures against an earlier "
+              "commit, alternately on the same machine."]
     lines += ["", "## Closed loop in MuJoCo (align scenario, 10 s, one core)", "",
               "| estimator | real-time factor of the loop | over the physics floor "
               "| us per step | estimator us / step |", "|---|---|---|---|---|"]
