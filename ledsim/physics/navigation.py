@@ -148,7 +148,13 @@ class NavigationSensor(Rows):
         self.accel_bias = self.rngs[0].standard_normal((1, 3)) * n.accel_bias_instability
         decay = (math.exp(-Te / n.gyro_bias_time), math.exp(-Te / n.accel_bias_time))
         self._decay = decay
-        self._root = (math.sqrt(1 - decay[0]**2), math.sqrt(1 - decay[1]**2))
+        root_te = math.sqrt(Te)
+        self._scale = (np.array([[self.gyro_std], [n.gyro_noise_density],
+                                 [n.accel_noise_density], [self.accel_std],
+                                 [n.gyro_bias_instability], [n.accel_bias_instability]]),
+                       np.array([[1.0], [root_te], [root_te], [1.0],
+                                 [math.sqrt(1 - decay[0]**2)],
+                                 [math.sqrt(1 - decay[1]**2)]]))
         self.k = np.zeros(1, dtype=np.int64)
         self._dvl, self._has_dvl = np.zeros((1, 3)), np.zeros(1, dtype=bool)
         self._dvl_gyro = np.zeros((1, 3))
@@ -201,26 +207,25 @@ class NavigationSensor(Rows):
         draws = [rng.standard_normal(18 + 3 * f + 3 * x + 1 + 3 * m) for rng, f, x, m in
                  zip(self.rngs, fresh.tolist(), fix_due.tolist(), mag_due.tolist(),
                      strict=True)]
-        white = np.array([d[:18] for d in draws]).reshape(N, 6, 3)
-        gyro_t = np.array([t.gyro for t in truths])
-        gyro = gyro_t + self.gyro_bias + white[:, 0] * self.gyro_std
+        # The six white draws times their figures, as each line below once scaled its
+        # own: gyro, delta angle, delta velocity, accelerometer, the two bias drifts.
+        noise = (np.array([d[:18] for d in draws]).reshape(N, 6, 3) * self._scale[0]) \
+            * self._scale[1]
+        true = np.array([(t.gyro, t.accel) for t in truths])
+        gyro = true[:, 0] + self.gyro_bias + noise[:, 0]
         attitude = np.array([w.hull_rotation for w in self.worlds])
-        root_te = math.sqrt(Te)
         delta = rotation_log(self._attitude.swapaxes(1, 2) @ attitude) \
-            + Te * self.gyro_bias + white[:, 1] * n.gyro_noise_density * root_te
+            + Te * self.gyro_bias + noise[:, 1]
         self._attitude = attitude
         velocity = np.array([w.hull_velocity()[3:] for w in self.worlds])
         dv = (attitude.swapaxes(1, 2) @ (velocity - self._velocity + Te * GRAVITY_REACTION)
-              [..., None])[..., 0] + Te * self.accel_bias \
-            + white[:, 2] * n.accel_noise_density * root_te
+              [..., None])[..., 0] + Te * self.accel_bias + noise[:, 2]
         self._velocity = velocity
-        accel = np.array([t.accel for t in truths]) + self.accel_bias + white[:, 3] * self.accel_std
-        self._biases = SensorBiases(self.gyro_bias.copy(), self.accel_bias.copy())
+        accel = true[:, 1] + self.accel_bias + noise[:, 3]
+        self._biases = SensorBiases(self.gyro_bias, self.accel_bias)  # replaced below
         # Gauss-Markov biases of stationary spread the bias instability.
-        self.gyro_bias = self._decay[0] * self.gyro_bias \
-            + white[:, 4] * n.gyro_bias_instability * self._root[0]
-        self.accel_bias = self._decay[1] * self.accel_bias \
-            + white[:, 5] * n.accel_bias_instability * self._root[1]
+        self.gyro_bias = self._decay[0] * self.gyro_bias + noise[:, 4]
+        self.accel_bias = self._decay[1] * self.accel_bias + noise[:, 5]
         fix, fix_time, fix_std = np.empty((N, 3)), np.empty(N), np.empty(N)
         for a in (fix, fix_time, fix_std):
             a.fill(np.nan)
