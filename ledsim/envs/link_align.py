@@ -214,7 +214,7 @@ class LinkAlignEnv(gym.Env, EzPickle):
             v = self.vehicle
             nav = v.reading
             encoder = math.remainder(nav.encoder, 2 * math.pi)
-            obs = np.r_[obs, nav.gyro[2], nav.dvl[0], nav.dvl[1], encoder, v.los.rate]
+            obs = np.array([*obs.tolist(), nav.gyro[2], *nav.dvl[:2], encoder, v.los.rate])
         return np.clip(obs, space.low, space.high), info
 
     def share_of_achievable(self) -> float:
