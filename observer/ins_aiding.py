@@ -9,22 +9,14 @@ from __future__ import annotations
 import numpy as np
 
 from .rotations import libm_square, rotation_exp, skew
+from .rows import matvec as _mv
+from .rows import transposed as _T
 
 #: Error-state blocks: position, velocity, attitude, gyro bias, accelerometer bias.
 P, V, TH, BG, BA = (slice(0, 3), slice(3, 6), slice(6, 9), slice(9, 12), slice(12, 15))
 N_ERROR = 15
 #: chi-square(3) at 1 - 1e-4: a fix whose normalised innovation exceeds it is an outlier.
 FIX_GATE = 21.11
-
-
-def _T(a: np.ndarray) -> np.ndarray:
-    """The transpose of each matrix of a stack."""
-    return a.swapaxes(-1, -2)
-
-
-def _mv(A: np.ndarray, x: np.ndarray) -> np.ndarray:
-    """A @ x of each row: (N, m, k) or (m, k) by (N, k) -> (N, m)."""
-    return (A @ x[..., None])[..., 0]
 
 
 class InsAiding:

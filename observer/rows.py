@@ -15,6 +15,17 @@ from collections.abc import Sequence
 import numpy as np
 
 
+def transposed(a: np.ndarray) -> np.ndarray:
+    """The transpose of each matrix of a stack (..., m, k) -> (..., k, m)."""
+    return a.swapaxes(-1, -2)
+
+
+def matvec(A: np.ndarray, x: np.ndarray) -> np.ndarray:
+    """A @ x of each row: (N, m, k) or (m, k) by (N, k) -> (N, m), through the BLAS
+    call one matrix by one vector takes (the same bits as one row alone)."""
+    return (A @ x[..., None])[..., 0]
+
+
 class Rows:
     """Mixin: the names of the per-row arrays (``ROW_ARRAYS``) and lists
     (``ROW_LISTS``) of a class with ``n`` rows and a ``single`` flag (one instance as

@@ -46,6 +46,8 @@ from observer.ins import FIX_GATE, AidedINS, InertialNoise, InsState
 from observer.line_of_sight import LineOfSight, LineOfSightFilter
 from observer.rowops import columns, ops
 from observer.rows import Rows
+from observer.rows import matvec as _mv
+from observer.rows import transposed as _T
 
 from ..config import GRAVITY, NavigationNoise
 from .batch import cross3
@@ -62,15 +64,6 @@ def inertial_noise(n: NavigationNoise) -> InertialNoise:
                          n.accel_noise_density, n.accel_bias_instability,
                          n.accel_bias_time, n.dvl_noise, n.depth_noise,
                          n.magnetometer_noise)
-
-
-def _T(a: np.ndarray) -> np.ndarray:
-    return a.swapaxes(-1, -2)
-
-
-def _mv(A: np.ndarray, x: np.ndarray) -> np.ndarray:
-    """A @ x of each row (the matrix of one vehicle times its vector)."""
-    return (A @ x[..., None])[..., 0]
 
 
 class Vehicle(Rows):
