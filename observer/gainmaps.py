@@ -45,6 +45,7 @@ class GainTableMap:
         self._W1T = [np.ascontiguousarray(W.T) for W in W1s]
         self._b1 = self.b1[None] if self.shared else self.b1
         self._key, self._C = None, None
+        self._rows: dict = {}
 
     @property
     def n_in(self) -> int:
@@ -66,8 +67,17 @@ class GainTableMap:
                 and bool(np.all(np.diff(self.log_s) > 0)))
 
     def _row(self, i: int, b: float, j: int) -> np.ndarray:
-        C = self.coef
-        return (1 - b) * C[i, j] + b * C[i, min(j + 1, C.shape[1] - 1)]
+        """Grid gain i's weights at noise (1 - b) s_j + b s_j+1; the last few kept, as
+        a gain moving inside one bracket of the grid asks for the same rows again."""
+        key = (i, b, j)
+        row = self._rows.get(key)
+        if row is None:
+            C = self.coef
+            row = (1 - b) * C[i, j] + b * C[i, min(j + 1, C.shape[1] - 1)]
+            if len(self._rows) >= 8:
+                self._rows.clear()
+            self._rows[key] = row
+        return row
 
     def weights(self, w: float, s: float = 1.0) -> tuple:
         """(i, a, weights at grid gain i, at grid gain i + 1) for gain w and noise s;
@@ -84,8 +94,11 @@ class GainTableMap:
 
     def features(self, v: np.ndarray, i: int = 0) -> np.ndarray:
         """The hidden layer (of grid gain i) plus a constant column."""
-        phi = np.tanh(np.asarray(v, float) @ self._W1T[i] + self._b1[i])
-        return np.concatenate([phi, np.ones(phi.shape[:-1] + (1,))], axis=-1)
+        hidden = np.asarray(v, float) @ self._W1T[i] + self._b1[i]
+        out = np.empty(hidden.shape[:-1] + (hidden.shape[-1] + 1,))
+        np.tanh(hidden, out=out[..., :-1])
+        out[..., -1] = 1.0
+        return out
 
     def __call__(self, v: np.ndarray, w: float, s: float = 1.0) -> np.ndarray:
         """The map at gain w and noise s, on inputs of shape (..., n_in)."""
