@@ -3,6 +3,7 @@ for) and its gain schedule (:mod:`observer.scheduled`)."""
 
 from __future__ import annotations
 
+import functools
 from dataclasses import dataclass
 
 import numpy as np
@@ -61,7 +62,7 @@ class ScheduledDesign:
 
     def rates(self, w: float) -> np.ndarray:
         """One bank's rates at gain w [1/s], slowest first, shape (n_rates,)."""
-        frac = np.linspace(0.0, 1.0, self.n_rates)
+        frac = _fractions(self.n_rates)
         lo = self.slowest * w
         return lo * (self.fastest / lo) ** frac
 
@@ -174,3 +175,11 @@ class GainSchedule:
 
     def gain(self, t: float, noise: float) -> float:
         return max(self.floor(noise), self.start / self._scale(noise) / (1.0 + t / self.settle))
+
+
+@functools.lru_cache(maxsize=8)
+def _fractions(n: int) -> np.ndarray:
+    """0 to 1 in n even steps (read-only: shared by every call)."""
+    frac = np.linspace(0.0, 1.0, n)
+    frac.flags.writeable = False
+    return frac
