@@ -36,7 +36,7 @@ AUTORESET_MODES = {"next-step": AutoresetMode.NEXT_STEP,
                    "same-step": AutoresetMode.SAME_STEP}
 
 
-def autoreset_mode(value) -> AutoresetMode:
+def parse_autoreset_mode(value) -> AutoresetMode:
     """``value`` as a supported :class:`AutoresetMode` (the enum, its value, or its name
     in :data:`AUTORESET_MODES`)."""
     spelt = {m.value: m for m in AUTORESET_MODES.values()}
@@ -75,7 +75,7 @@ class LinkAlignVectorEnv(VectorEnv):
         if kwargs.get("render_mode") is not None:
             raise ValueError(f"render_mode {kwargs['render_mode']!r} is not allowed in the "
                              "vector env: render one LinkAlignEnv instead")
-        self.mode = globals()["autoreset_mode"](autoreset_mode)
+        self.mode = parse_autoreset_mode(autoreset_mode)
         self.metadata = {**self.metadata, "autoreset_mode": self.mode}
         self.num_envs = int(num_envs)
         self.envs = [LinkAlignEnv(**kwargs) for _ in range(self.num_envs)]
@@ -126,6 +126,9 @@ class LinkAlignVectorEnv(VectorEnv):
         return first
 
     def step(self, actions):
+        """One control step of every sub-environment: ``actions`` (N, 1), each the
+        single env's action. Returns the batched (obs, reward, terminated, truncated,
+        info) of Gymnasium's vector API, with the autoreset of the module docstring."""
         actions = np.asarray(actions)
         if actions.shape[:1] != (self.num_envs,):
             raise ValueError(f"actions of shape {actions.shape} are not allowed: one row "
