@@ -58,7 +58,8 @@ def _init_worker() -> None:
 
 def run_jobs(fn: Callable[[T], R], jobs: Sequence[T], workers: int = 1, desc: str = "",
              progress: bool = True,
-             on_result: Callable[[T, R], None] | None = None) -> list[R]:
+             on_result: Callable[[T, R], None] | None = None,
+             sizes: Sequence[int] | None = None) -> list[R]:
     """``[fn(job) for job in jobs]``, on ``workers`` processes when that helps.
 
     Args:
@@ -69,13 +70,15 @@ def run_jobs(fn: Callable[[T], R], jobs: Sequence[T], workers: int = 1, desc: st
         progress: show the progress bar.
         on_result: called in this process with ``(job, result)`` as each job finishes
             (in job order), e.g. to save it so that an interrupted run can resume.
+        sizes: what each job counts for on the bar (a batch of seeds: its seeds);
+            None: one each.
     """
-    bar = _bar_options(len(jobs), desc, progress)
+    bar = _bar_options(len(jobs) if sizes is None else int(sum(sizes)), desc, progress)
     workers = min(workers, len(jobs))
     if workers <= 1:
-        return _collect(jobs, (fn(j) for j in jobs), bar, on_result)
+        return _collect(jobs, (fn(j) for j in jobs), bar, on_result, sizes)
     with ProcessPoolExecutor(workers, initializer=_init_worker) as pool:
-        return _collect(jobs, pool.map(fn, jobs, chunksize=1), bar, on_result)
+        return _collect(jobs, pool.map(fn, jobs, chunksize=1), bar, on_result, sizes)
 
 
 def run_jobs_ray(fn: Callable[[T], R], jobs: Sequence[T], workers: int = 2,
@@ -147,10 +150,13 @@ def _bar_options(total: int, desc: str, progress: bool) -> dict:
     return dict(total=total, desc=desc, disable=not progress, leave=False, file=sys.stderr)
 
 
-def _collect(jobs, stream, bar: dict, on_result) -> list:
+def _collect(jobs, stream, bar: dict, on_result, sizes=None) -> list:
+    """The results of ``stream`` (one per job), the bar advanced by each job's size."""
     results = []
-    for job, res in zip(jobs, tqdm(stream, **bar), strict=False):
-        if on_result is not None:
-            on_result(job, res)
-        results.append(res)
+    with tqdm(**bar) as shown:
+        for k, (job, res) in enumerate(zip(jobs, stream, strict=False)):
+            if on_result is not None:
+                on_result(job, res)
+            results.append(res)
+            shown.update(1 if sizes is None else sizes[k])
     return results

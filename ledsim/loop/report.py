@@ -214,15 +214,16 @@ def run_seeds(cfg: RunConfig, progress: bool = True, all_traces: bool = False
     seed, with its trace for seed 0, or for every seed with ``all_traces``).
 
     The seeds are stepped together in batches (:func:`seed_batches`), one job of the
-    Monte-Carlo runner each (the progress bar counts batches), through the one closed
-    loop (:class:`~ledsim.loop.closed_loop.ClosedLoop`): a seed's numbers do not depend
-    on its batch or on the number of workers."""
+    Monte-Carlo runner each (the progress bar counts seeds, a batch's at once), through
+    the one closed loop (:class:`~ledsim.loop.closed_loop.ClosedLoop`): a seed's numbers
+    do not depend on its batch or on the number of workers."""
     cfg.validate()
     check_checkpoint(cfg)
-    jobs = [(cfg, b, [all_traces or s == 0 for s in b])
-            for b in seed_batches(cfg.seeds, cfg.workers)]
+    batches = seed_batches(cfg.seeds, cfg.workers)
+    jobs = [(cfg, b, [all_traces or s == 0 for s in b]) for b in batches]
     outs = [o for batch in run_jobs(_job, jobs, cfg.workers,
-                                    f"{cfg.scenario}/{cfg.estimator}", progress)
+                                    f"{cfg.scenario}/{cfg.estimator}", progress,
+                                    sizes=[len(b) for b in batches])
             for o in batch]
     return summarize(cfg, outs), outs
 
