@@ -15,7 +15,7 @@ from dataclasses import dataclass, fields
 
 import numpy as np
 
-from observer.hull_loads import HullLoadObserver
+from observer.hull_loads import HullLoadObserver, soft_deadband
 from observer.ins import InsState
 from observer.rowops import columns, ops
 from observer.rows import Rows
@@ -137,20 +137,12 @@ class StationKeeper(Rows):
         super().put(row, item)
         self.loads.put(row, item.loads)
 
-    def act(self, nav: InsState, covariance: np.ndarray, velocity: np.ndarray,
-            omega: np.ndarray, a: np.ndarray) -> np.ndarray:
-        """Drive the thrusters from the navigated pose ``nav``, its ``covariance`` (the
-        INS's, 15x15), the hull-frame ``velocity`` [m/s], the bias-corrected gyro
-        ``omega`` [rad/s] and the hull-frame acceleration ``a`` [m/s^2]; returns the
-        thrust applied [N, N m]."""
-        rows = InsState(*(np.asarray(x)[None] for x in (
-            nav.position, nav.velocity, nav.attitude, nav.gyro_bias, nav.accel_bias)))
-        return self.act_rows(rows, np.asarray(covariance)[None], np.asarray(velocity)[None],
-                             np.asarray(omega)[None], np.asarray(a)[None])[0]
-
     def act_rows(self, nav: InsState, P: np.ndarray, velocity: np.ndarray,
                  omega: np.ndarray, a: np.ndarray) -> np.ndarray:
-        """:meth:`act` of every hull (each argument with a leading axis of N)."""
+        """Drive every hull's thrusters (each argument with a leading axis of N) from the
+        navigated pose ``nav``, its covariance ``P`` (the INS's, 15x15), the hull-frame
+        ``velocity`` [m/s], the bias-corrected gyro ``omega`` [rad/s] and the hull-frame
+        acceleration ``a`` [m/s^2]; returns the thrust applied [N, N m], (N, 5)."""
         alpha = (omega - self._omega) / self.Te
         if not self.k.all():  # a first step has no earlier rate
             alpha = np.where(self.k[:, None] > 0, alpha, 0.0)
@@ -197,18 +189,12 @@ def _pd_terms(o, g: StationKeeping, kp, kd, r10, r00, r20, px, py, pz, hx, hy, h
     k, kv = g.deadband, g.velocity_deadband
     e2 = [o.square(e) for e in err]
     v2 = [o.square(v) for v in rate[:3]]
-    share = [_soft(o, e2[0] + e2[1], 0.5 * (vx_ + vy_), k), _soft(o, e2[2], vz_, k),
-             _soft(o, e2[3], vpitch, k), _soft(o, e2[4], vyaw, k)]
-    vshare = [_soft(o, v2[0] + v2[1], 0.5 * (vvx + vvy), kv), _soft(o, v2[2], vvz, kv)]
+    share = [soft_deadband(e2[0] + e2[1], 0.5 * (vx_ + vy_), k),
+             soft_deadband(e2[2], vz_, k), soft_deadband(e2[3], vpitch, k),
+             soft_deadband(e2[4], vyaw, k)]
+    vshare = [soft_deadband(v2[0] + v2[1], 0.5 * (vvx + vvy), kv),
+              soft_deadband(v2[2], vvz, kv)]
     err = [err[0] * share[0], err[1] * share[0], err[2] * share[1], err[3] * share[2],
            err[4] * share[3]]
     rate = [rate[0] * vshare[0], rate[1] * vshare[0], rate[2] * vshare[1], rate[3], rate[4]]
     return [-kp[i] * err[i] - kd[i] * rate[i] for i in range(5)]
-
-
-def _soft(o, square, variance, k: float):
-    """:func:`~observer.hull_loads.soft_deadband` of one float or of a column."""
-    if not k:
-        return 1.0
-    ratio = k * k * variance / o.maximum(square, 1e-300)
-    return o.where(ratio >= 1.0, 0.0, 1.0 - ratio * ratio)
