@@ -25,6 +25,7 @@ from pathlib import Path
 
 import numpy as np
 import torch
+from bench_batch import batch_against_rollout, floor_us  # scripts/, beside this file
 
 from ledsim.config import LinkConstants
 from ledsim.outputs import atomic_write_text
@@ -86,33 +87,18 @@ def world_speed(timestep: float, seconds: float = 20.0, repeats: int = 3,
 
 
 def physics_floor(seconds: float = 10.0, repeats: int = 5) -> tuple[float, float]:
-    """(control steps per second, real-time factor) of the bare physics floor: the
-    substeps of one control period (``mj_step``) and the two ``mj_multiRay`` calls of the
-    sensor, with no Python around them beyond the loop itself."""
-    import mujoco
-
-    from ledsim.physics.world import RAY_GROUPS, LinkWorld
+    """(control steps per second, real-time factor) of the bare physics floor, the best
+    of ``repeats`` (:func:`bench_batch.floor_us`: the substeps of one control period and
+    the sensor's two ``mj_multiRay`` calls)."""
+    from ledsim.physics.world import LinkWorld
 
     world = LinkWorld()
-    m, d = world.model, world.data
-    sub, n_rays = world.config.substeps, world.config.n_rays
-    n = int(round(seconds / world.config.constants.Te))
-    geom, dist = np.zeros(n_rays, dtype=np.int32), np.zeros(n_rays)
-    dirs = np.tile([1.0, 0.0, 0.0], n_rays)
-    body = world.ids.gimbal_body
     best = np.inf
     for _ in range(repeats):
         world.reset(0.1)
         world.set_torque(0.002)
-        origins = [world.photodiode_pos(i).copy() for i in range(2)]
-        t0 = time.perf_counter()
-        for _ in range(n):
-            mujoco.mj_step(m, d, nstep=sub)
-            for o in origins:
-                mujoco.mj_multiRay(m, d, o, dirs, RAY_GROUPS, 1, body, geom, dist, None,
-                                   n_rays, 1.0)
-        best = min(best, time.perf_counter() - t0)
-    return n / best, seconds / best
+        best = min(best, floor_us(world, seconds))
+    return 1e6 / best, 1e6 / best * world.config.constants.Te
 
 
 def rollout_speed(n_worlds: int, seconds: float = 5.0) -> float:
@@ -144,49 +130,12 @@ def rollout_speed(n_worlds: int, seconds: float = 5.0) -> float:
 def batched_speed(n_worlds: int = 16, threads: int = 1, estimator: str = "kkl",
                   supervision: bool = False, seconds: float = 2.0,
                   repeats: int = 2) -> tuple[float, float]:
-    """(closed-loop control steps per second of the loop stepping ``n_worlds`` seeds
-    together, the same of
-    ``mujoco.rollout`` stepping the same worlds open loop): align scenario, ``n_worlds``
-    seeds, ``threads`` threads for both. The rollout starts from the batch's initial
-    states and replays the torques the closed loop applied, so it does the same physics
-    (without kinematics, sensor, disturbances or control)."""
-    import mujoco
-    from mujoco import rollout
-
-    from ledsim.loop.closed_loop import ClosedLoop
-    from ledsim.loop.config import RunConfig
-
-    cfg = RunConfig(scenario="align", estimator=estimator, supervision=supervision,
-                    seconds=seconds)
-    best, best_roll = np.inf, np.inf
-    for _ in range(repeats):
-        loop = ClosedLoop(cfg, range(n_worlds), threads)
-        worlds = [r.world for r in loop.runs]
-        full = mujoco.mjtState.mjSTATE_FULLPHYSICS
-        m = worlds[0].model
-        x0 = np.stack([_state(w, full) for w in worlds])
-        t0 = time.perf_counter()
-        outs = loop.run(keep_trace=True)
-        best = min(best, time.perf_counter() - t0)
-        sub = worlds[0].config.substeps
-        ctrl = np.zeros((n_worlds, loop.steps * sub, m.nu))  # the thrusters stay idle
-        ctrl[..., worlds[0].ids.motor] = np.repeat(np.stack([o.trace.torque for o in outs]),
-                                                   sub, axis=1)
-        data = [mujoco.MjData(m) for _ in range(threads)]
-        with rollout.Rollout(nthread=threads if threads > 1 else 0) as r:
-            t0 = time.perf_counter()
-            r.rollout([m] * n_worlds, data, x0, ctrl)
-            best_roll = min(best_roll, time.perf_counter() - t0)
-    steps = n_worlds * loop.steps
-    return steps / best, steps / best_roll
-
-
-def _state(world, spec):
-    import mujoco
-
-    x = np.zeros(mujoco.mj_stateSize(world.model, spec))
-    mujoco.mj_getState(world.model, world.data, x, spec)
-    return x
+    """The best of ``repeats`` of :func:`bench_batch.batch_against_rollout`: (steps / s
+    of the loop stepping ``n_worlds`` seeds, of ``mujoco.rollout`` replaying the same
+    worlds), ``threads`` threads for both."""
+    runs = [batch_against_rollout(n_worlds, seconds, threads, estimator, supervision)
+            for _ in range(repeats)]
+    return max(r[0] for r in runs), max(r[1] for r in runs)
 
 
 def closed_loop_speed(estimator: str, integrator: str = "implicitfast") -> tuple[float, float]:

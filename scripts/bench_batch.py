@@ -55,17 +55,17 @@ def measure(quick: bool) -> dict:
     t0 = time.perf_counter()
     loop.run()
     out["single_us"] = 1e6 * (time.perf_counter() - t0) / loop.steps
-    out["floor_us"] = _floor(loop.runs[0].world, 2.0 if quick else 5.0)
+    out["floor_us"] = floor_us(loop.runs[0].world, 2.0 if quick else 5.0)
     n = 16 if quick else 64
-    out["batch_sps"], out["rollout_sps"] = _batch(n, 0.3 if quick else 1.0)
+    out["batch_sps"], out["rollout_sps"] = batch_against_rollout(n, 0.3 if quick else 1.0)
     out.update(_envs(n, 20 if quick else 60))
     out["worlds"] = n
     return out
 
 
-def _floor(world, seconds: float) -> float:
-    """Microseconds per control step of the bare physics: the substeps of one period and
-    the sensor's two ``mj_multiRay`` calls."""
+def floor_us(world, seconds: float) -> float:
+    """Microseconds per control step of the bare physics of ``world``: the substeps of
+    one period and the sensor's two ``mj_multiRay`` calls, nothing else."""
     import mujoco
     import numpy as np
 
@@ -87,9 +87,13 @@ def _floor(world, seconds: float) -> float:
     return 1e6 * (time.perf_counter() - t0) / steps
 
 
-def _batch(n: int, seconds: float) -> tuple[float, float]:
-    """(steps / s of the loop stepping ``n`` seeds, of ``mujoco.rollout`` replaying the
-    same worlds with the loop's torques, thrusters included), one thread."""
+def batch_against_rollout(n: int, seconds: float, threads: int = 1,
+                          estimator: str = "kkl", supervision: bool = True
+                          ) -> tuple[float, float]:
+    """(steps / s of the closed loop stepping ``n`` seeds of the align scenario, of
+    ``mujoco.rollout`` stepping the same worlds open loop from the same states with the
+    motor torques the loop applied and the thrusters at their start command), both on
+    ``threads`` threads, measured in the same call."""
     import mujoco
     import numpy as np
     from mujoco import rollout
@@ -97,8 +101,9 @@ def _batch(n: int, seconds: float) -> tuple[float, float]:
     from ledsim.loop.closed_loop import ClosedLoop
     from ledsim.loop.config import RunConfig
 
-    cfg = RunConfig(scenario="align", estimator="kkl", seconds=seconds)
-    loop = ClosedLoop(cfg, range(n), 1)
+    cfg = RunConfig(scenario="align", estimator=estimator, supervision=supervision,
+                    seconds=seconds)
+    loop = ClosedLoop(cfg, range(n), threads)
     worlds = [r.world for r in loop.runs]
     m = worlds[0].model
     full = mujoco.mjtState.mjSTATE_FULLPHYSICS
@@ -113,9 +118,10 @@ def _batch(n: int, seconds: float) -> tuple[float, float]:
     ctrl = np.repeat(ctrl0[:, None, :], loop.steps * sub, axis=1)
     ctrl[..., worlds[0].ids.motor] = np.repeat(np.stack([o.trace.torque for o in outs]),
                                                sub, axis=1)
-    with rollout.Rollout(nthread=0) as r:
+    data = [mujoco.MjData(m) for _ in range(threads)]
+    with rollout.Rollout(nthread=threads if threads > 1 else 0) as r:
         t0 = time.perf_counter()
-        r.rollout([m] * n, [mujoco.MjData(m)], x0, ctrl)
+        r.rollout([m] * n, data, x0, ctrl)
         roll = time.perf_counter() - t0
     steps = n * loop.steps
     return steps / wall, steps / roll
