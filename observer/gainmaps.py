@@ -44,8 +44,8 @@ class GainTableMap:
         W1s = self.W1[None] if self.shared else self.W1
         self._W1T = [np.ascontiguousarray(W.T) for W in W1s]
         self._b1 = self.b1[None] if self.shared else self.b1
-        self._key, self._C = None, None
         self._rows: dict = {}
+        self._weights: dict = {}
 
     @property
     def n_in(self) -> int:
@@ -81,16 +81,20 @@ class GainTableMap:
 
     def weights(self, w: float, s: float = 1.0) -> tuple:
         """(i, a, weights at grid gain i, at grid gain i + 1) for gain w and noise s;
-        for a shared hidden layer the interpolated weights alone (cached)."""
+        for a shared hidden layer the interpolated weights alone. The last few are
+        kept: a change of gain asks for the old gain's and the new one's in turn."""
         key = (w, s)
-        if key != self._key:
+        C = self._weights.get(key)
+        if C is None:
             i, a = _bracket(self.log_w, float(np.log(w)))
             j, b = _bracket(self.log_s, float(np.log(s)))
             i1 = min(i + 1, self.coef.shape[0] - 1)
             lo, hi = self._row(i, b, j), self._row(i1, b, j)
-            self._C = ((1 - a) * lo + a * hi) if self.shared else (i, a, lo, hi)
-            self._key = key
-        return self._C
+            C = ((1 - a) * lo + a * hi) if self.shared else (i, a, lo, hi)
+            if len(self._weights) >= 8:
+                self._weights.clear()
+            self._weights[key] = C
+        return C
 
     def features(self, v: np.ndarray, i: int = 0) -> np.ndarray:
         """The hidden layer (of grid gain i) plus a constant column."""

@@ -87,12 +87,18 @@ def rotation_log(R: np.ndarray) -> np.ndarray:
     return np.where(small, 0.5 * axis, big) if small.any() else big
 
 
+_EYE = np.eye(3)
+_EYE.flags.writeable = False
+
+
 def _exp_one(phi: np.ndarray) -> np.ndarray:
     angle = math.sqrt(float(phi[0] ** 2 + phi[1] ** 2 + phi[2] ** 2))
-    K = skew(phi)
+    # skew(phi) from floats: the same products by the signs (0.0 keeps a zero's sign).
+    x, y, z = phi.tolist()
+    K = np.array([[x * 0.0, z * -1.0, y], [z, x * 0.0, x * -1.0], [y * -1.0, x, x * 0.0]])
     if angle < 1e-9:
-        return np.eye(3) + K + 0.5 * K @ K
-    return np.eye(3) + (math.sin(angle) / angle) * K \
+        return _EYE + K + 0.5 * K @ K
+    return _EYE + (math.sin(angle) / angle) * K \
         + ((1.0 - math.cos(angle)) / angle**2) * K @ K
 
 

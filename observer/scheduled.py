@@ -24,6 +24,8 @@ KKL observers", learn T as a function of the gain; ``docs/observer.md``.)
 
 from __future__ import annotations
 
+import math
+
 import numpy as np
 
 from .estimator import Estimator, usable_mask
@@ -66,6 +68,9 @@ class ScheduledKKL(Estimator):
         self.schedule = schedule or GainSchedule()
         self.u_bar, self.use_omega = float(u_bar), use_omega
         self._channel = design.channel()
+        # The box in plain floats: the per-step distances below are of two numbers.
+        self._center = system.domain_center.astype(float).tolist()
+        self._half = np.asarray(system.domain_halfwidth, dtype=float).tolist()
         self.noise = 1.0  # measurement noise over the nominal, in the model's gain
         self.reset()
 
@@ -122,6 +127,13 @@ class ScheduledKKL(Estimator):
     def _gain(self, w: float) -> None:
         self.w = w
         self._a = self.system.Te * self.design.rate_vector(w)
+        self._slowest = self.design.rates(w)[0]
+
+    def _box_distance(self, x: np.ndarray, centre) -> float:
+        """max_i |x_i - centre_i| / halfwidth_i [-] (NaN if any is), as numpy's max of
+        the array computes it."""
+        d = [abs(v - c) / h for v, c, h in zip(x.tolist(), centre, self._half, strict=True)]
+        return math.nan if any(v != v for v in d) else max(d)
 
     def _estimate(self) -> np.ndarray:
         """The wide decoder's estimate, blended into the locked decoder's once it has
@@ -135,7 +147,7 @@ class ScheduledKKL(Estimator):
         them, or at once for a jump of ``jump`` boxes (a kick)."""
         sys_, box, sch = self.system, self.design.lock_box, self.schedule
         x = self.decoder_T_star(self.z, self.w, self.noise)
-        off = float(np.max(np.abs(x - sys_.domain_center) / sys_.domain_halfwidth))
+        off = self._box_distance(x, self._center)
         self._off += min(sys_.Te / sch.settle_off, 1.0) * (off - self._off)
         jump = off > sch.jump * box
         self._wide = self._off > box or jump  # the clock holds (see predict)
@@ -146,12 +158,12 @@ class ScheduledKKL(Estimator):
             self._inside = 0.0
         elif self._off <= 0.5 * box:
             self._inside += sys_.Te
-        memory = sch.lock_after / self.design.rates(self.w)[0]
+        memory = sch.lock_after / self._slowest
         self.locked = 0.0 if self.decoder_locked is None else \
             min(max((self._inside - memory) / sch.lock_ramp, 0.0), 1.0)
         if self.locked > 0:
             near = self.decoder_locked(self.z, self.w, self.noise)
-            if np.max(np.abs(near - x) / sys_.domain_halfwidth) > sch.disagree:
+            if self._box_distance(near, x.tolist()) > sch.disagree:
                 # Powers the model does not explain (a gain or a parallax error of a
                 # moving hull) put z off the locked decoder's training states, where
                 # it extrapolates: its rate ran the other way from the true one, and
@@ -187,12 +199,16 @@ class ScheduledKKL(Estimator):
     def predict(self, u) -> None:
         a = self._a  # 1 - l_i(w)
         z = self.z + a * (self._y[self._channel] - self.z)
-        moved = np.any(np.asarray(u, dtype=float) != self.u_bar)
+        moved = u != self.u_bar if isinstance(u, float | int) else \
+            bool(np.any(np.asarray(u, dtype=float) != self.u_bar))
         if self.use_omega and moved:
             f, xh = self.system.f, self._xhat
             driven = f(xh, u)
             self.outside_domain = self.outside_domain or not self.in_domain(driven)
-            z = z + self._enc(driven, self.w) - self._enc(f(xh, self.u_bar), self.w)
+            # Both states through one call, stacked as rows of one: each row's
+            # products are the single vector's (a (2, n) matrix's would not be).
+            both = self._enc(np.array([driven, f(xh, self.u_bar)])[:, None], self.w)
+            z = z + both[0, 0] - both[1, 0]
         self.z = z
         self.k += 1
         sch = self.schedule

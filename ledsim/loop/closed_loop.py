@@ -166,7 +166,7 @@ class LoopRun:
         if self.world.light_gain is not None:
             self.medium[k] = self.world.light_gain[self.world.config.constants.layout.reference]
         if self.vehicle is not None:
-            self.navigated[k] = self.vehicle.navigation.position
+            self.navigated[k] = self.vehicle.navigated_position
         t0 = time.perf_counter()
         los = self.vehicle.los if self.aided else None
         torque = self.step(r.power, t, r.gimbal_angle, r.gimbal_rate, los)

@@ -158,7 +158,8 @@ class LinkSupervisor:
         if self.fast is not None and self.fast.active:
             return self._acquire(y, q, qdot, xhat)
         lost = self.monitor.update(y_model, xhat)
-        blind = not np.isfinite(y).any()
+        finite = np.isfinite(y)
+        blind = not finite.any()
         turned = blind and bool(self.trusted_q) and \
             abs(q - self.trusted_q[-1]) > BLIND_TRAVEL
         lost = lost or turned
@@ -166,7 +167,7 @@ class LinkSupervisor:
         if not (lost or scan.active):
             if not blind:  # only angles the beam confirmed: a spun gimbal's are not
                 self.trusted_q.append(q)
-            if self.carry is not None and np.isfinite(y).all():
+            if self.carry is not None and finite.all():
                 self.carry.lit = (float(self._angle(xhat)), q)
             self.gain.update(y, self.monitor.noise_std * self.gain.ratio)
             # A bank picks the member trained for the noise the rescaled powers now

@@ -176,6 +176,11 @@ class Vehicle(Rows):
         return self.ins.state
 
     @property
+    def navigated_position(self) -> np.ndarray:
+        """The navigation's position [m] (:attr:`navigation`'s)."""
+        return self.ins.state.position
+
+    @property
     def velocity(self) -> np.ndarray:
         """The hull's velocity at the IMU in its own frame, navigated [m/s]."""
         s = self.ins.state
@@ -269,6 +274,11 @@ class VehicleRow:
         s, i = self.vehicles.ins.states, self.i
         return InsState(s.position[i], s.velocity[i], s.attitude[i], s.gyro_bias[i],
                         s.accel_bias[i])
+
+    @property
+    def navigated_position(self) -> np.ndarray:
+        """The navigation's position [m] (:attr:`navigation`'s, without building it)."""
+        return self.vehicles.ins.states.position[self.i]
 
     @property
     def los(self) -> LineOfSight:
