@@ -103,7 +103,7 @@ def load(path: str | Path, system: DiscreteSystem, check: bool = True, *,
     if not path.is_file():
         raise CheckpointError(f"checkpoint {str(path)!r} does not exist")
     try:
-        payload = _read(path)
+        payload = _read_shared(path)
         meta = json.loads(payload["metadata_json"])
         if payload.get("format") == scheduled_checkpoint.FORMAT:
             _check_system(path, meta["system"], system, check)
@@ -144,6 +144,25 @@ def _named(obs, meta: dict, name: str | None):
         obs.name = name
     obs.training_metadata = {k: meta[k] for k in ("design", "training", "report") if k in meta}
     return obs
+
+
+_PAYLOADS: dict = {}
+
+
+def _read_shared(path: Path) -> dict:
+    """:func:`_read`, kept per process while the file is unchanged, its arrays made
+    read-only: the runs of many seeds share one copy of the weights (64 seeds held 64
+    copies of a few MB each, and stepped through them out of cache)."""
+    st = path.stat()
+    key = (str(path.resolve()), st.st_ino, st.st_size, st.st_mtime_ns)
+    payload = _PAYLOADS.get(key)
+    if payload is None:
+        payload = _read(path)
+        for v in payload.values():
+            if isinstance(v, np.ndarray):
+                v.flags.writeable = False
+        _PAYLOADS[key] = payload
+    return payload
 
 
 def _read(path: Path) -> dict:

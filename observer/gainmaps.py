@@ -23,6 +23,23 @@ def _bracket(grid: np.ndarray, v: float) -> tuple[int, float]:
     return i, float((v - grid[i]) / (grid[i + 1] - grid[i]))
 
 
+_TRANSPOSED: dict = {}
+
+
+def _transposed(W1: np.ndarray) -> list[np.ndarray]:
+    """Each grid gain's hidden layer transposed, contiguous (for ``v @ W1^T``); one
+    copy per read-only ``W1`` (a checkpoint's, shared by the maps of many runs)."""
+    kept = _TRANSPOSED.get(id(W1))
+    if kept is not None and kept[0] is W1:  # the entry holds W1: its id is not reused
+        return kept[1]
+    out = [np.ascontiguousarray(W.T) for W in (W1[None] if W1.ndim == 2 else W1)]
+    if not W1.flags.writeable:
+        if len(_TRANSPOSED) >= 16:
+            _TRANSPOSED.clear()
+        _TRANSPOSED[id(W1)] = (W1, out)
+    return out
+
+
 class GainTableMap:
     """``coef(log w, log s) @ [tanh(W1 v + b1), 1]``.
 
@@ -41,8 +58,7 @@ class GainTableMap:
         self.coef = np.asarray(coef, float)
         self.log_w, self.log_s = np.asarray(log_w, float), np.asarray(log_s, float)
         self.shared = self.W1.ndim == 2
-        W1s = self.W1[None] if self.shared else self.W1
-        self._W1T = [np.ascontiguousarray(W.T) for W in W1s]
+        self._W1T = _transposed(self.W1)
         self._b1 = self.b1[None] if self.shared else self.b1
         self._rows: dict = {}
         self._weights: dict = {}
