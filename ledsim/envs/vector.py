@@ -27,7 +27,7 @@ import numpy as np
 from gymnasium.vector import AutoresetMode, VectorEnv
 from gymnasium.vector.utils import batch_space
 
-from ..physics.tick import PhysicsPass, prepare
+from ..physics.tick import PhysicsPass, step_worlds
 from ..physics.vehicle import Vehicle
 from .link_align import LinkAlignEnv
 
@@ -138,13 +138,11 @@ class LinkAlignVectorEnv(VectorEnv):
             np.ones(n, dtype=bool)
         for i in np.flatnonzero(stepping):
             envs[i].command(actions[i])
-        self._physics(None if stepping.all() else
-                      [envs[i].world for i in np.flatnonzero(stepping)])
-        for i in np.flatnonzero(stepping):
-            e = envs[i]
-            prepare(e.world, e.disturbances, e.k * e.dt)
-        if self._vehicles is not None:  # every row (a resetting one is put back below)
-            self._vehicles.act_rows(np.array([e.k * e.dt for e in envs]))
+        # Every vehicle row steps (a resetting one is put back below).
+        step_worlds(self._physics, [(envs[i].world, envs[i].disturbances,
+                                     envs[i].k * envs[i].dt) for i in np.flatnonzero(stepping)],
+                    self._vehicles,
+                    None if self._vehicles is None else np.array([e.k * e.dt for e in envs]))
         obs, infos = [None] * n, [None] * n
         reward = np.zeros(n)
         truncated = np.zeros(n, dtype=bool)

@@ -30,7 +30,7 @@ from ..physics.disturbances import parse_disturbance
 from ..physics.sensor import SensorReading
 from ..physics.simulation import SimulationResult
 from ..physics.system import GimbalSystem
-from ..physics.tick import PhysicsPass, prepare
+from ..physics.tick import PhysicsPass, step_worlds
 from ..physics.vehicle import Vehicle
 from ..physics.world import LinkWorld
 from ..step import ControlStep, GimbalMotor, Unsupervised
@@ -238,8 +238,7 @@ class ClosedLoop:
         keep = [keep_trace] * n if isinstance(keep_trace, bool) else list(keep_trace)
         t0 = time.perf_counter()
         # The tick of every world (physics.tick.advance in parts): torques commanded,
-        # the physics of all worlds in one pass, each world prepared, the vehicles'
-        # step in one pass.
+        # then physics.tick.step_worlds.
         with PhysicsPass([run.world for run in runs], self.threads) as physics:
             for k in tqdm(range(self.steps), disable=not progress, desc="simulate",
                           leave=False, file=sys.stderr):
@@ -249,12 +248,9 @@ class ClosedLoop:
                     if self.on_step is not None:
                         self.on_step(run, t)
                     run.applied[k] = run.world.set_torque(torque)
-                physics()
                 t_next = (k + 1) * Te
-                for run in runs:
-                    prepare(run.world, run.disturbances, t_next)
-                if self.vehicles is not None:
-                    self.vehicles.act_rows(t_next)
+                step_worlds(physics, [(run.world, run.disturbances, t_next) for run in runs],
+                            self.vehicles, t_next)
         wall = time.perf_counter() - t0
         times = np.arange(self.steps) * Te
         return [outcome(run.result(times), run.xhat, run.flags, self.cfg,

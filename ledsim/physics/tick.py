@@ -47,6 +47,20 @@ def advance(world: LinkWorld, disturbances: Sequence, torque: float, t_next: flo
     return applied
 
 
+def step_worlds(physics: PhysicsPass, worlds: Sequence[tuple[LinkWorld, Sequence, float]],
+                vehicles=None, vehicle_time=None) -> None:
+    """The rest of the tick of many worlds, once each one's torque is commanded: the
+    physics of ``worlds`` (``(world, disturbances, t_next)`` each) in one pass of
+    ``physics``, each world prepared at its ``t_next`` [s], then the stacked
+    ``vehicles`` (:class:`~ledsim.physics.vehicle.Vehicle`, or None) in one pass at
+    ``vehicle_time`` [s] (one time, or one per row)."""
+    physics([w for w, _, _ in worlds])
+    for world, disturbances, t_next in worlds:
+        prepare(world, disturbances, t_next)
+    if vehicles is not None:
+        vehicles.act_rows(vehicle_time)
+
+
 class PhysicsPass:
     """Step the physics of many worlds one control period each, split over ``threads``
     (1: in the calling thread). A context manager: it owns its threads.
