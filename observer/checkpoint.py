@@ -151,8 +151,9 @@ _PAYLOADS: dict = {}
 
 def _read_shared(path: Path) -> dict:
     """:func:`_read`, kept per process while the file is unchanged, its arrays made
-    read-only: the runs of many seeds share one copy of the weights (64 seeds held 64
-    copies of a few MB each, and stepped through them out of cache)."""
+    read-only (copy one to change it): the runs of many seeds share one copy of the
+    weights (64 seeds held 64 copies of a few MB each, and stepped through them out of
+    cache)."""
     st = path.stat()
     key = (str(path.resolve()), st.st_ino, st.st_size, st.st_mtime_ns)
     payload = _PAYLOADS.get(key)
@@ -161,6 +162,8 @@ def _read_shared(path: Path) -> dict:
         for v in payload.values():
             if isinstance(v, np.ndarray):
                 v.flags.writeable = False
+        if len(_PAYLOADS) >= 16:  # a process that loads many checkpoints keeps a few
+            _PAYLOADS.clear()
         _PAYLOADS[key] = payload
     return payload
 

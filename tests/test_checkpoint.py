@@ -1,3 +1,5 @@
+import copy
+
 import numpy as np
 import pytest
 
@@ -91,3 +93,22 @@ def test_unstable_eigenvalues_are_refused(tmp_path, tiny_observer, system):
                     unstable)
     with pytest.raises(checkpoint.CheckpointError, match="outside"):
         checkpoint.load(bad, system)
+
+
+def test_loads_of_one_file_share_read_only_weights_until_it_changes(tiny_observer, system,
+                                                                    tmp_path, rng):
+    path = checkpoint.save(tiny_observer, tmp_path / "obs.pt")
+    a, b = checkpoint.load(path, system), checkpoint.load(path, system)
+    wa = [v for v in vars(a.encoder_T).values() if isinstance(v, np.ndarray)]
+    wb = [v for v in vars(b.encoder_T).values() if isinstance(v, np.ndarray)]
+    assert any(x is y for x, y in zip(wa, wb, strict=True))  # one copy for both
+    assert not any(x.flags.writeable for x, y in zip(wa, wb, strict=True) if x is y)
+    # The file rewritten with other weights: the next load reads them, not the kept ones.
+    other = copy.deepcopy(tiny_observer)
+    for v in vars(other.encoder_T).values():
+        if isinstance(v, np.ndarray) and v.dtype.kind == "f":
+            v += 0.5
+    checkpoint.save(other, path)
+    x = system.sample_domain(rng, 4)
+    np.testing.assert_allclose(checkpoint.load(path, system).encode(x), other.encode(x))
+    assert not np.allclose(a.encode(x), other.encode(x))
