@@ -11,12 +11,14 @@ parent (Linux ``PR_SET_PDEATHSIG``), so a killed ``ledsim run`` leaves no orphan
 from __future__ import annotations
 
 import ctypes
+import multiprocessing
 import os
 import signal
 import socket
 import sys
 from collections.abc import Callable, Sequence
 from concurrent.futures import ProcessPoolExecutor
+from concurrent.futures import TimeoutError as FuturesTimeout
 from typing import TypeVar
 
 from tqdm.auto import tqdm
@@ -50,7 +52,34 @@ def _die_with_parent() -> None:
     signal.signal(signal.SIGINT, signal.SIG_IGN)  # the parent handles Ctrl-C
 
 
-def _init_worker() -> None:
+#: How a running job reports its progress (:func:`report_progress`), set by
+#: :func:`run_jobs` around each job: in this process, or in a worker.
+_REPORT: Callable[[float], None] | None = None
+_SHARES = None  # a worker's view of the shares done of every job (shared memory)
+
+
+def report_progress(share: float) -> None:
+    """Called by a job as it goes, with the share of it done so far (0-1): the bar of
+    :func:`run_jobs` moves within the job by that share of its size (a batch of 16
+    seeds moves it seed by seed, not in one jump). Outside a job, nothing happens."""
+    if _REPORT is not None:
+        _REPORT(share)
+
+
+def _tracked(item):
+    """``fn(job)`` of ``item = (fn, k, job)`` in a worker, its progress in share k."""
+    global _REPORT
+    fn, k, job = item
+    _REPORT = lambda share: _SHARES.__setitem__(k, share)  # noqa: E731
+    try:
+        return fn(job)
+    finally:
+        _REPORT = None
+
+
+def _init_worker(shares=None) -> None:
+    global _SHARES
+    _SHARES = shares
     _die_with_parent()
     if "torch" in sys.modules:  # two workers on two cores, not four threads fighting
         sys.modules["torch"].set_num_threads(1)
@@ -73,12 +102,20 @@ def run_jobs(fn: Callable[[T], R], jobs: Sequence[T], workers: int = 1, desc: st
         sizes: what each job counts for on the bar (a batch of seeds: its seeds);
             None: one each.
     """
-    bar = _bar_options(len(jobs) if sizes is None else int(sum(sizes)), desc, progress)
+    sizes = [1] * len(jobs) if sizes is None else list(sizes)
+    bar = _bar_options(int(sum(sizes)), desc, progress)
     workers = min(workers, len(jobs))
     if workers <= 1:
-        return _collect(jobs, (fn(j) for j in jobs), bar, on_result, sizes)
-    with ProcessPoolExecutor(workers, initializer=_init_worker) as pool:
-        return _collect(jobs, pool.map(fn, jobs, chunksize=1), bar, on_result, sizes)
+        return _collect_here(fn, jobs, bar, on_result, sizes)
+    shares = multiprocessing.Array("d", len(jobs), lock=False)
+    with ProcessPoolExecutor(workers, initializer=_init_worker, initargs=(shares,)) as pool:
+        futures = [pool.submit(_tracked, (fn, k, job)) for k, job in enumerate(jobs)]
+        try:
+            return _collect(jobs, futures, bar, on_result, sizes, shares)
+        except BaseException:  # Ctrl-C, a failed job: the queued jobs do not start
+            for f in futures:
+                f.cancel()
+            raise
 
 
 def run_jobs_ray(fn: Callable[[T], R], jobs: Sequence[T], workers: int = 2,
@@ -150,13 +187,51 @@ def _bar_options(total: int, desc: str, progress: bool) -> dict:
     return dict(total=total, desc=desc, disable=not progress, leave=False, file=sys.stderr)
 
 
-def _collect(jobs, stream, bar: dict, on_result, sizes=None) -> list:
-    """The results of ``stream`` (one per job), the bar advanced by each job's size."""
-    results = []
+def _move(shown, position: float) -> None:
+    """The bar forward to ``position`` (jobs' sizes, to two decimals: tqdm prints it,
+    and a sum of updates would print its round-off)."""
+    position = round(position, 2)
+    if position > shown.n:
+        shown.n = position
+        shown.refresh()
+
+
+def _collect_here(fn, jobs, bar: dict, on_result, sizes: list) -> list:
+    """``fn`` of each job in this process, in order; the bar follows each job's reports
+    and advances by its size when it is done."""
+    global _REPORT
+    results, done = [], 0.0
     with tqdm(**bar) as shown:
-        for k, (job, res) in enumerate(zip(jobs, stream, strict=False)):
+        for job, size in zip(jobs, sizes, strict=True):
+            _REPORT = lambda share, at=done, size=size: _move(shown, at + size * share)  # noqa: E731
+            try:
+                res = fn(job)
+            finally:
+                _REPORT = None
             if on_result is not None:
                 on_result(job, res)
             results.append(res)
-            shown.update(1 if sizes is None else sizes[k])
+            done += size
+            _move(shown, done)
+    return results
+
+
+def _collect(jobs, futures, bar: dict, on_result, sizes: list, shares) -> list:
+    """The results of ``futures`` (one per job, in job order); the bar at the finished
+    jobs' sizes plus the running ones' shares of theirs, looked at twice a second."""
+    results = []
+    with tqdm(**bar) as shown:
+        for k, (job, future) in enumerate(zip(jobs, futures, strict=True)):
+            while True:
+                try:
+                    res = future.result(timeout=0.5)
+                    break
+                except FuturesTimeout:
+                    _move(shown, sum(sizes[:k]) + sum(
+                        size * share for size, share in zip(sizes[k:], shares[k:],
+                                                            strict=True)))
+            if on_result is not None:
+                on_result(job, res)
+            results.append(res)
+            _move(shown, sum(sizes[:k + 1]))
     return results

@@ -25,6 +25,7 @@ from observer.oracle import Oracle
 from observer.recording import RecordingEstimator
 
 from ..control import intensity_maximum
+from ..montecarlo import report_progress
 from ..optics import nominal_noise_std, peak_power
 from ..physics.disturbances import parse_disturbance
 from ..physics.sensor import SensorReading
@@ -48,6 +49,9 @@ from .outcome import Navigation, RunOutcome, Trace, achievable_power, outcome  #
 from .slew import TimeOptimalSlew
 from .start import Surroundings, start_world  # noqa: F401 (re-exported)
 from .supervisor import LinkSupervisor
+
+#: Steps between two reports of a run's progress (montecarlo.report_progress).
+REPORT_EVERY = 50
 
 
 def make_supervisor(cfg: RunConfig, system: GimbalSystem, estimator, estimator_system,
@@ -251,6 +255,8 @@ class ClosedLoop:
                 t_next = (k + 1) * Te
                 step_worlds(physics, [(run.world, run.disturbances, t_next) for run in runs],
                             self.vehicles, t_next)
+                if (k + 1) % REPORT_EVERY == 0:  # the share done, for run_jobs' bar
+                    report_progress((k + 1) / self.steps)
         wall = time.perf_counter() - t0
         times = np.arange(self.steps) * Te
         return [outcome(run.result(times), run.xhat, run.flags, self.cfg,
