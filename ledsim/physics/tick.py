@@ -21,8 +21,6 @@ from __future__ import annotations
 from collections.abc import Sequence
 from concurrent.futures import ThreadPoolExecutor
 
-import numpy as np
-
 from .world import LinkWorld
 
 
@@ -73,9 +71,6 @@ class PhysicsPass:
     def __init__(self, worlds: Sequence[LinkWorld], threads: int = 1):
         self.worlds = list(worlds)
         self.threads = max(1, min(int(threads), len(self.worlds)))
-        bounds = np.linspace(0, len(self.worlds), self.threads + 1).round().astype(int)
-        self._chunks = [self.worlds[a:b] for a, b in zip(bounds[:-1], bounds[1:],
-                                                           strict=True)]
         self._pool = ThreadPoolExecutor(self.threads) if self.threads > 1 else None
 
     @staticmethod
@@ -86,11 +81,11 @@ class PhysicsPass:
     def __call__(self, worlds: Sequence[LinkWorld] | None = None) -> None:
         """One control period of every world's physics (torques already commanded), or
         of ``worlds`` only."""
+        worlds = self.worlds if worlds is None else worlds
         if self._pool is None:
-            self._step(self.worlds if worlds is None else worlds)
+            self._step(worlds)
             return
-        chunks = self._chunks if worlds is None else \
-            [worlds[i::self.threads] for i in range(self.threads)]
+        chunks = [worlds[i::self.threads] for i in range(self.threads)]
         for f in [self._pool.submit(self._step, c) for c in chunks]:
             f.result()
 
