@@ -23,6 +23,19 @@ def _bracket(grid: np.ndarray, v: float) -> tuple[int, float]:
     return i, float((v - grid[i]) / (grid[i + 1] - grid[i]))
 
 
+def _kept(cache: dict, key, make, most: int = 8):
+    """``cache[key]``, made by ``make()`` when missing; the cache is emptied when it
+    holds ``most`` (the few keys a run asks for again stay cheap, and memory stays
+    bounded)."""
+    value = cache.get(key)
+    if value is None:
+        value = make()
+        if len(cache) >= most:
+            cache.clear()
+        cache[key] = value
+    return value
+
+
 _TRANSPOSED: dict = {}
 
 
@@ -85,32 +98,22 @@ class GainTableMap:
     def _row(self, i: int, b: float, j: int) -> np.ndarray:
         """Grid gain i's weights at noise (1 - b) s_j + b s_j+1; the last few kept, as
         a gain moving inside one bracket of the grid asks for the same rows again."""
-        key = (i, b, j)
-        row = self._rows.get(key)
-        if row is None:
-            C = self.coef
-            row = (1 - b) * C[i, j] + b * C[i, min(j + 1, C.shape[1] - 1)]
-            if len(self._rows) >= 8:
-                self._rows.clear()
-            self._rows[key] = row
-        return row
+        C = self.coef
+        return _kept(self._rows, (i, b, j),
+                     lambda: (1 - b) * C[i, j] + b * C[i, min(j + 1, C.shape[1] - 1)])
 
     def weights(self, w: float, s: float = 1.0) -> tuple:
         """(i, a, weights at grid gain i, at grid gain i + 1) for gain w and noise s;
         for a shared hidden layer the interpolated weights alone. The last few are
         kept: a change of gain asks for the old gain's and the new one's in turn."""
-        key = (w, s)
-        C = self._weights.get(key)
-        if C is None:
-            i, a = _bracket(self.log_w, float(np.log(w)))
-            j, b = _bracket(self.log_s, float(np.log(s)))
-            i1 = min(i + 1, self.coef.shape[0] - 1)
-            lo, hi = self._row(i, b, j), self._row(i1, b, j)
-            C = ((1 - a) * lo + a * hi) if self.shared else (i, a, lo, hi)
-            if len(self._weights) >= 8:
-                self._weights.clear()
-            self._weights[key] = C
-        return C
+        return _kept(self._weights, (w, s), lambda: self._interpolated(w, s))
+
+    def _interpolated(self, w: float, s: float) -> tuple:
+        i, a = _bracket(self.log_w, float(np.log(w)))
+        j, b = _bracket(self.log_s, float(np.log(s)))
+        i1 = min(i + 1, self.coef.shape[0] - 1)
+        lo, hi = self._row(i, b, j), self._row(i1, b, j)
+        return ((1 - a) * lo + a * hi) if self.shared else (i, a, lo, hi)
 
     def features(self, v: np.ndarray, i: int = 0) -> np.ndarray:
         """The hidden layer (of grid gain i) plus a constant column."""
