@@ -14,6 +14,8 @@ import math
 
 import numpy as np
 
+from observer.rowops import FLOATS
+
 from .config import LinkConstants, ReceiverResponse
 
 
@@ -41,9 +43,11 @@ def receiver_response(phi, r: ReceiverResponse) -> np.ndarray:
     return e1 + e2
 
 
-def receiver_response_at(phi: float, r: ReceiverResponse) -> float:
-    """g(phi) for one angle [rad], in plain floats (the per-step paths; same formula)."""
-    _, _, e1, e2 = response_terms(phi, r, math.exp)
+def receiver_response_at(phi, r: ReceiverResponse, o=FLOATS):
+    """g(phi) for one angle [rad] in plain floats (the per-step paths; same formula), or
+    with ``o`` :data:`~observer.rowops.ARRAYS` for the angles of many worlds, each with
+    libm's ``exp`` as one angle's."""
+    _, _, e1, e2 = response_terms(phi, r, o.exp)
     return e1 + e2
 
 
@@ -64,10 +68,12 @@ def transmitter_gain(d, theta, c: LinkConstants) -> np.ndarray:
     return c.power_scale * np.exp(-c.attenuation * d) / d**2 * led_intensity(theta, c)
 
 
-def transmitter_gain_at(d: float, theta: float, c: LinkConstants) -> float:
-    """:func:`transmitter_gain` for one distance [m] and angle [rad], in plain floats."""
-    cos_t = max(math.cos(theta), 0.0)
-    return c.power_scale * math.exp(-c.attenuation * d) / d**2 * cos_t**c.lambertian_order
+def transmitter_gain_at(d, theta, c: LinkConstants, o=FLOATS):
+    """:func:`transmitter_gain` for one distance [m] and angle [rad] in plain floats, or
+    with ``o`` :data:`~observer.rowops.ARRAYS` for many, each as one's to the last bit."""
+    cos_t = o.maximum(o.cos(theta), 0.0)
+    return c.power_scale * o.exp(-c.attenuation * d) / o.square(d) * \
+        o.pow(cos_t, c.lambertian_order)
 
 
 def received_power(gain, incidence_angle, r: ReceiverResponse, visible=1.0) -> np.ndarray:

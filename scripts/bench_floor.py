@@ -13,7 +13,8 @@ the loop around it (warm caches, one thread):
   layer; each row's interpolated output weights gathered first). Either way this is
   the float64 arithmetic of these networks, which any loop running this observer does;
 * **the vehicle**: the stacked vehicles' step (``Vehicle.act_rows``), per vehicle;
-* **the sensor**: each world's ray-cast read, per world.
+* **the sensor**: every world's read in one pass (``SensorRows``, as the loop reads
+  them), and each world's ray-cast read alone, per world.
 
 The physics and the maps (the cheaper of the two ways) bound the steps per second of
 any loop that runs this observer on this physics, however little Python it spends
@@ -115,6 +116,7 @@ def measure(n: int, seconds: float) -> dict:
 
     from ledsim.loop.closed_loop import ClosedLoop
     from ledsim.loop.config import RunConfig
+    from ledsim.physics.sensor_rows import SensorRows
 
     loop_sps, rollout_sps = batch_against_rollout(n, seconds)
     cfg = RunConfig(scenario="align", estimator="kkl", supervision=True, seconds=seconds)
@@ -128,8 +130,10 @@ def measure(n: int, seconds: float) -> dict:
            "maps_one_by_one_us": 1e6 * maps_one_by_one(estimators) / n,
            "maps_stacked_us": 1e6 * maps_stacked(estimators) / n,
            "vehicle_us": 1e6 * _per_call(lambda: loop.vehicles.act_rows(seconds), 20) / n,
-           "sensor_us": 1e6 * _per_call(lambda: [r.sensor.read() for r in loop.runs], 20)
-           / n}
+           "sensor_us": 1e6 * _per_call(SensorRows([r.sensor for r in loop.runs]).read,
+                                        20) / n,
+           "sensor_alone_us": 1e6 * _per_call(lambda: [r.sensor.read() for r in loop.runs],
+                                              20) / n}
     # The stacked maps compute the seed-by-seed numbers (to round-off where a row's
     # interpolation weight is 0: a product by 0.0 is added instead of skipped).
     e, (z, w, s, _) = estimators[-1], _map_inputs(estimators[-1])
@@ -153,7 +157,9 @@ def table(r: dict) -> str:
             ("the KKL's maps, seed by seed", r["maps_one_by_one_us"], None),
             ("the KKL's maps, stacked over the seeds", r["maps_stacked_us"], None),
             ("the vehicle, stacked", r["vehicle_us"], None),
-            ("the sensor, world by world", r["sensor_us"], None),
+            ("the sensors, read in one pass (as the loop reads them)", r["sensor_us"],
+             None),
+            ("the sensors, world by world (each alone)", r["sensor_alone_us"], None),
             ("**physics and the maps** (the cheaper of the two)", r["estimator_floor_us"],
              r["estimator_floor_sps"]),
             ("**with the vehicle and the sensor** as they are", r["floor_us"],

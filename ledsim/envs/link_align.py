@@ -204,8 +204,8 @@ class LinkAlignEnv(gym.Env, EzPickle):
         self.k = 0  # control steps of this episode
         self.start_gimbal_angle = 0.0
 
-    def _observe(self):
-        r = self.reading = self.sensor.read()
+    def _observe(self, reading=None):
+        r = self.reading = self.sensor.read() if reading is None else reading
         info = {"phi": r.phi, "phidot": r.phidot, "power_clean": r.power_clean.copy(),
                 "time": self.k * self.dt}
         space = self.observation_space
@@ -273,10 +273,10 @@ class LinkAlignEnv(gym.Env, EzPickle):
         prepare(self.world, self.disturbances, self.k * self.dt, self.vehicle)
         return self.observe_step()
 
-    def observe_step(self):
-        """After the next control step was prepared (its vehicle acted): observe and
-        reward (``step``'s return)."""
-        obs, info = self._observe()
+    def observe_step(self, reading=None):
+        """After the next control step was prepared (its vehicle acted): observe (the
+        sensor's ``reading`` read with other worlds', or now) and reward."""
+        obs, info = self._observe(reading)
         reward = self.share_of_achievable()
         return obs, reward, False, False, info
 

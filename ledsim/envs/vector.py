@@ -27,6 +27,7 @@ import numpy as np
 from gymnasium.vector import AutoresetMode, VectorEnv
 from gymnasium.vector.utils import batch_space
 
+from ..physics.sensor_rows import SensorRows
 from ..physics.tick import PhysicsPass, step_worlds
 from ..physics.vehicle import Vehicle
 from .link_align import LinkAlignEnv
@@ -90,6 +91,7 @@ class LinkAlignVectorEnv(VectorEnv):
         self._elapsed = np.zeros(self.num_envs, dtype=np.int64)
         self._ended = np.zeros(self.num_envs, dtype=bool)  # next-step: reset at this step
         self._vehicles: Vehicle | None = None
+        self._sensors: SensorRows | None = None
 
     def reset(self, *, seed: int | list | None = None, options: dict | None = None):
         """Reset every sub-environment: ``seed`` S gives sub-environment i the seed
@@ -105,6 +107,7 @@ class LinkAlignVectorEnv(VectorEnv):
                                  f"({self.num_envs}), or one integer")
         firsts = [e.reset(seed=s, options=options) for e, s in zip(self.envs, seeds,
                                                                     strict=True)]
+        self._sensors = SensorRows([e.sensor for e in self.envs])  # read in one pass
         self._elapsed[:] = 0
         self._ended[:] = False
         # The sub-environments' vehicles (each started as its own) as one, stepped in
@@ -119,6 +122,7 @@ class LinkAlignVectorEnv(VectorEnv):
     def _reset_one(self, i: int):
         """Sub-environment ``i`` anew (its next episode), its vehicle back in its row."""
         first = self.envs[i].reset()
+        self._sensors.sensors[i] = self.envs[i].sensor
         self._elapsed[i] = 0
         if self._vehicles is not None:
             self._vehicles.put(i, self.envs[i].vehicle)
@@ -146,9 +150,12 @@ class LinkAlignVectorEnv(VectorEnv):
         obs, infos = [None] * n, [None] * n
         reward = np.zeros(n)
         truncated = np.zeros(n, dtype=bool)
+        # Every world's sensor in one pass (a world about to reset reads its old sensor,
+        # which the reset replaces with a fresh one).
+        readings = self._sensors.read()
         for i in range(n):
             if stepping[i]:
-                obs[i], reward[i], _, _, infos[i] = envs[i].observe_step()
+                obs[i], reward[i], _, _, infos[i] = envs[i].observe_step(readings[i])
                 self._elapsed[i] += 1
                 truncated[i] = self.max_episode_steps is not None and \
                     self._elapsed[i] >= self.max_episode_steps

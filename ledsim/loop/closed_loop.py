@@ -1,6 +1,7 @@
 """The loop closed in physics: one seed or many, through the one control step.
 
-MuJoCo supplies the true angle, the ray sensor the two powers, and each seed's
+MuJoCo supplies the true angle, the ray sensors the two powers (every seed's read in
+one pass: :class:`~ledsim.physics.sensor_rows.SensorRows`), and each seed's
 :class:`~ledsim.step.ControlStep` (dropout gate, supervisor with its estimator, control
 law, motor) turns them into a motor torque; :func:`~ledsim.physics.tick.advance` moves
 the world on. :class:`ClosedLoop` steps the runs of several seeds together, their
@@ -29,6 +30,7 @@ from ..montecarlo import report_progress
 from ..optics import nominal_noise_std, peak_power
 from ..physics.disturbances import parse_disturbance
 from ..physics.sensor import SensorReading
+from ..physics.sensor_rows import SensorRows
 from ..physics.simulation import SimulationResult
 from ..physics.system import GimbalSystem
 from ..physics.tick import PhysicsPass, step_worlds
@@ -159,10 +161,10 @@ class LoopRun:
         self.station = None if v is None else np.r_[v.home[0], v.surface]
         self.spent = 0.0  # s in the control step
 
-    def control(self, k: int, t: float) -> float:
-        """Read the sensor at step ``k`` (time ``t`` [s]), record it, and return the motor
-        torque [N m] the control step commands."""
-        r = self.reading = self.sensor.read()
+    def control(self, k: int, t: float, reading: SensorReading | None = None) -> float:
+        """Record the sensor's ``reading`` at step ``k`` (time ``t`` [s]; None: read it
+        now), and return the motor torque [N m] the control step commands."""
+        r = self.reading = self.sensor.read() if reading is None else reading
         self.geo[k] = r.distance, r.emission_angle, r.incidence_angle, r.visible_fraction
         self.state[k] = r.phi, r.phidot
         self.gimbal[k] = r.gimbal_angle, r.gimbal_rate
@@ -243,12 +245,13 @@ class ClosedLoop:
         t0 = time.perf_counter()
         # The tick of every world (physics.tick.advance in parts): torques commanded,
         # then physics.tick.step_worlds.
+        sensors = SensorRows([run.sensor for run in runs])
         with PhysicsPass([run.world for run in runs], self.threads) as physics:
             for k in tqdm(range(self.steps), disable=not progress, desc="simulate",
                           leave=False, file=sys.stderr):
                 t = k * Te
-                for run in runs:
-                    torque = run.control(k, t)
+                for run, reading in zip(runs, sensors.read(), strict=True):
+                    torque = run.control(k, t, reading)
                     if self.on_step is not None:
                         self.on_step(run, t)
                     run.applied[k] = run.world.set_torque(torque)

@@ -1,6 +1,8 @@
-"""N copies of the world stepped together.
+"""N copies of the world stepped together, and their poses as arrays.
 
-:class:`WorldBatch` holds one :class:`LinkWorld` per run, each with its own ``MjData``
+:class:`WorldPoses` gathers what the sensors read from N worlds' ``MjData`` into (N, ...)
+arrays, whoever steps them (the closed loop's :class:`~ledsim.physics.tick.PhysicsPass`,
+or a batch). :class:`WorldBatch` holds one :class:`LinkWorld` per run, each with its own ``MjData``
 (and one shared ``MjModel`` unless a disturbance changes the model: a water current sets
 its medium velocity). One control period of every world is a single call: set the motor
 torques, ``mj_step`` through the substeps, apply each world's disturbances for the next
@@ -21,21 +23,19 @@ from .tick import advance, prepare
 from .world import RAY_GROUPS, LinkWorld
 
 
-class WorldBatch:
-    """N worlds advanced one control period at a time.
+class WorldPoses:
+    """The poses N worlds' sensors read, as (N, ...) arrays: :meth:`gather` copies them
+    from every world's ``MjData`` (one concatenate per quantity: cheaper than N row
+    copies), whoever steps the worlds.
 
     Args:
-        worlds: the worlds, each already reset to its initial state.
-        disturbances: per world, its (already reset) disturbances.
-        threads: threads that step the worlds (1: in the calling thread).
+        worlds: the worlds (one model layout: the same sites, bodies and geoms).
     """
 
-    def __init__(self, worlds: Sequence[LinkWorld], disturbances: Sequence[Sequence],
-                 threads: int = 1):
-        if len(worlds) != len(disturbances) or not worlds:
-            raise ValueError("one list of disturbances per world, and at least one world")
+    def __init__(self, worlds: Sequence[LinkWorld]):
+        if not worlds:
+            raise ValueError("at least one world")
         self.worlds = list(worlds)
-        self.disturbances = [list(d) for d in disturbances]
         n = len(self.worlds)
         w0 = self.worlds[0]
         m = w0.model
@@ -68,19 +68,10 @@ class WorldBatch:
         self.geom_xpos = np.empty((n, m.ngeom, 3))
         self._plane_mat = np.empty((self.planes.size, n, 9))
         self.transmitter_velocity = np.empty((n, 3))
-        self.applied = np.zeros(n)  # motor torques of the last step [N m]
-        self.threads = max(1, min(int(threads), n))
-        bounds = np.linspace(0, n, self.threads + 1).round().astype(int)
-        self._chunks = [range(a, b) for a, b in zip(bounds[:-1], bounds[1:], strict=True)]
-        self._pool = ThreadPoolExecutor(self.threads) if self.threads > 1 else None
-        self.time = w0.time
         # Each output as a flat run of its worlds' rows, so that one C-level concatenate
         # fills it (np.stack's Python bookkeeping cost 10 us per world-step).
         self._gathers = [(out.reshape((-1,) + out.shape[2:]), views)
                          for out, views in self._gather_plan()]
-        for i in range(n):
-            prepare(self.worlds[i], self.disturbances[i], self.time)
-        self._gather()
 
     def _gather_plan(self) -> list[tuple[np.ndarray, list]]:
         """(output array, one view per world) of every quantity read each step."""
@@ -120,18 +111,7 @@ class WorldBatch:
         """Gimbal hinge rate of each world [rad/s], (N,)."""
         return self._qvel_hinge[:, 0]
 
-    def close(self) -> None:
-        if self._pool is not None:
-            self._pool.shutdown()
-            self._pool = None
-
-    def __enter__(self) -> WorldBatch:
-        return self
-
-    def __exit__(self, *exc) -> None:
-        self.close()
-
-    def _gather(self) -> None:
+    def gather(self) -> None:
         """Copy every world's poses into the (N, ...) arrays (one concatenate per
         quantity: cheaper than N row copies)."""
         for out, views in self._gathers:
@@ -139,37 +119,6 @@ class WorldBatch:
         if not self._all_sites:
             self.site_pos = self._site_xpos_all[:, self._sites]
             self.site_mat = self._site_xmat_all[:, self._sites]
-
-    def _advance(self, chunk: range, torques: list, t_next: float) -> None:
-        for i in chunk:
-            self.applied[i] = advance(self.worlds[i], self.disturbances[i], torques[i], t_next)
-
-    def _map(self, work, *args) -> None:
-        """``work(chunk, *args)`` for every thread's chunk of worlds, then gather."""
-        if self._pool is None:
-            work(self._chunks[0], *args)
-        else:
-            for f in [self._pool.submit(work, c, *args) for c in self._chunks]:
-                f.result()
-        self._gather()
-
-    def step(self, torques: np.ndarray, t_next: float) -> None:
-        """Command the motor torques [N m] (clipped at the limit; ``applied`` holds what
-        was applied), advance every world by Te, and prepare step ``t_next`` [s]."""
-        self._map(self._advance, np.asarray(torques, dtype=float).tolist(), t_next)
-        self.time = t_next
-
-    def _set_state(self, chunk: range, states: np.ndarray, spec: int) -> None:
-        for i in chunk:
-            w = self.worlds[i]
-            mujoco.mj_setState(w.model, w.data, states[i], spec)
-            prepare(w, self.disturbances[i], float(states[i, 0]))
-
-    def set_state(self, states: np.ndarray) -> None:
-        """Every world to its full physics state (``mjSTATE_FULLPHYSICS``, (N, nstate),
-        as ``mujoco.rollout`` returns them), with its kinematics."""
-        self._map(self._set_state, states, mujoco.mjtState.mjSTATE_FULLPHYSICS)
-        self.time = float(states[0, 0])
 
     @property
     def hinge_axis(self) -> np.ndarray:
@@ -217,6 +166,76 @@ class WorldBatch:
         site)."""
         ang, lin = self.gimbal_cvel[:, :3], self.gimbal_cvel[:, 3:]
         return ang, lin - cross3(self.site_pos[:, self.reference] - self.root_com, ang)
+
+
+
+class WorldBatch(WorldPoses):
+    """N worlds advanced one control period at a time (their poses gathered after each).
+
+    Args:
+        worlds: the worlds, each already reset to its initial state.
+        disturbances: per world, its (already reset) disturbances.
+        threads: threads that step the worlds (1: in the calling thread).
+    """
+
+    def __init__(self, worlds: Sequence[LinkWorld], disturbances: Sequence[Sequence],
+                 threads: int = 1):
+        if len(worlds) != len(disturbances) or not worlds:
+            raise ValueError("one list of disturbances per world, and at least one world")
+        super().__init__(worlds)
+        self.disturbances = [list(d) for d in disturbances]
+        n = len(self.worlds)
+        self.applied = np.zeros(n)  # motor torques of the last step [N m]
+        self.threads = max(1, min(int(threads), n))
+        bounds = np.linspace(0, n, self.threads + 1).round().astype(int)
+        self._chunks = [range(a, b) for a, b in zip(bounds[:-1], bounds[1:], strict=True)]
+        self._pool = ThreadPoolExecutor(self.threads) if self.threads > 1 else None
+        self.time = self.worlds[0].time
+        for i in range(n):
+            prepare(self.worlds[i], self.disturbances[i], self.time)
+        self.gather()
+
+    def close(self) -> None:
+        if self._pool is not None:
+            self._pool.shutdown()
+            self._pool = None
+
+    def __enter__(self) -> WorldBatch:
+        return self
+
+    def __exit__(self, *exc) -> None:
+        self.close()
+
+    def _advance(self, chunk: range, torques: list, t_next: float) -> None:
+        for i in chunk:
+            self.applied[i] = advance(self.worlds[i], self.disturbances[i], torques[i], t_next)
+
+    def _map(self, work, *args) -> None:
+        """``work(chunk, *args)`` for every thread's chunk of worlds, then gather."""
+        if self._pool is None:
+            work(self._chunks[0], *args)
+        else:
+            for f in [self._pool.submit(work, c, *args) for c in self._chunks]:
+                f.result()
+        self.gather()
+
+    def step(self, torques: np.ndarray, t_next: float) -> None:
+        """Command the motor torques [N m] (clipped at the limit; ``applied`` holds what
+        was applied), advance every world by Te, and prepare step ``t_next`` [s]."""
+        self._map(self._advance, np.asarray(torques, dtype=float).tolist(), t_next)
+        self.time = t_next
+
+    def _set_state(self, chunk: range, states: np.ndarray, spec: int) -> None:
+        for i in chunk:
+            w = self.worlds[i]
+            mujoco.mj_setState(w.model, w.data, states[i], spec)
+            prepare(w, self.disturbances[i], float(states[i, 0]))
+
+    def set_state(self, states: np.ndarray) -> None:
+        """Every world to its full physics state (``mjSTATE_FULLPHYSICS``, (N, nstate),
+        as ``mujoco.rollout`` returns them), with its kinematics."""
+        self._map(self._set_state, states, mujoco.mjtState.mjSTATE_FULLPHYSICS)
+        self.time = float(states[0, 0])
 
 
 def dot3(a: np.ndarray, b: np.ndarray) -> np.ndarray:

@@ -16,7 +16,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from ..optics import received_power, receiver_response, transmitter_gain
-from .batch import WorldBatch, cross3, dot3
+from .batch import WorldBatch, WorldPoses, cross3, dot3
 from .sensor import IrradianceSensor, SensorReading
 
 
@@ -38,6 +38,44 @@ def segment_distance(points: np.ndarray, a: np.ndarray, b: np.ndarray) -> np.nda
     ap = points - a[..., None, :]
     s = np.clip(dot3(ap, ab) / np.maximum(dot3(ab, ab), 1e-300), 0.0, 1.0)
     return np.linalg.norm(ap - s[..., None] * ab, axis=-1)
+
+
+def needs_rays(poses: WorldPoses, aperture_radius: float,
+               margin: float = 1e-6) -> np.ndarray:
+    """(N, n_pd): which photodiodes of the worlds of ``poses`` have a light-blocking
+    geom within reach of their line of sight to the LED aperture (of radius
+    ``aperture_radius`` [m]): its bounding sphere within the aperture radius (plus
+    ``margin`` [m]) of the segment photodiode-LED, or a plane that close to either end.
+    Elsewhere the line of sight is provably clear: no ray can be stopped."""
+    b = poses
+    n, npd = len(b.worlds), b.n_photodiodes
+    if b.unbounded:
+        return np.ones((n, npd), dtype=bool)
+    out = np.zeros((n, npd), dtype=bool)
+    led, pds = b.led_pos, b.photodiode_pos
+    if b.planes.size:
+        normal = b.plane_normal
+        led_side = dot3(led[:, None] - b.plane_pos, normal)  # (N, P)
+        for i in range(npd):
+            pd_side = dot3(pds[:, None, i] - b.plane_pos, normal)
+            out[:, i] = np.any(np.minimum(pd_side, led_side)
+                               <= aperture_radius + margin, axis=1)
+    if b.blocking_geoms.size == 0:
+        return out
+    centres = b.geom_pos
+    reach = b.rbound + aperture_radius + margin  # (G,)
+    # Coarse pass: both segments lie in the ball around the LED through the farther
+    # photodiode; only geoms that reach into it get the exact segment test.
+    radius = np.sqrt(np.max(dot3(pds - led[:, None], pds - led[:, None]), axis=1))
+    gap = centres - led[:, None]
+    near = np.sqrt(dot3(gap, gap)) <= radius[:, None] + reach
+    worlds, geoms = np.nonzero(near)
+    if worlds.size:
+        for i in range(npd):
+            dist = segment_distance(centres[worlds, geoms][:, None],
+                                    pds[worlds, i], led[worlds])[:, 0]
+            np.logical_or.at(out[:, i], worlds, dist <= reach[geoms])
+    return out
 
 
 class BatchSensor:
@@ -68,38 +106,8 @@ class BatchSensor:
         self.k = 0
 
     def needs_rays(self) -> np.ndarray:
-        """(N, n_pd): which photodiodes have a light-blocking geom within reach of their
-        line of sight to the LED aperture: its bounding sphere within the aperture radius
-        of the segment photodiode-LED, or a plane that close to either end."""
-        b = self.batch
-        n, npd = len(b.worlds), b.n_photodiodes
-        if b.unbounded:
-            return np.ones((n, npd), dtype=bool)
-        out = np.zeros((n, npd), dtype=bool)
-        led, pds = b.led_pos, b.photodiode_pos
-        if b.planes.size:
-            normal = b.plane_normal
-            led_side = dot3(led[:, None] - b.plane_pos, normal)  # (N, P)
-            for i in range(npd):
-                pd_side = dot3(pds[:, None, i] - b.plane_pos, normal)
-                out[:, i] = np.any(np.minimum(pd_side, led_side)
-                                   <= self.aperture_radius + self.margin, axis=1)
-        if b.blocking_geoms.size == 0:
-            return out
-        centres = b.geom_pos
-        reach = b.rbound + self.aperture_radius + self.margin  # (G,)
-        # Coarse pass: both segments lie in the ball around the LED through the farther
-        # photodiode; only geoms that reach into it get the exact segment test.
-        radius = np.sqrt(np.max(dot3(pds - led[:, None], pds - led[:, None]), axis=1))
-        gap = centres - led[:, None]
-        near = np.sqrt(dot3(gap, gap)) <= radius[:, None] + reach
-        worlds, geoms = np.nonzero(near)
-        if worlds.size:
-            for i in range(npd):
-                dist = segment_distance(centres[worlds, geoms][:, None],
-                                        pds[worlds, i], led[worlds])[:, 0]
-                np.logical_or.at(out[:, i], worlds, dist <= reach[geoms])
-        return out
+        """(N, n_pd): :func:`needs_rays` of the batch."""
+        return needs_rays(self.batch, self.aperture_radius, self.margin)
 
     def clean(self) -> tuple[np.ndarray, ...]:
         """(clean power [W], phi [rad], theta [rad], distance [m], visible fraction,

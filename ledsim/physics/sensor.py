@@ -21,6 +21,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from observer.noise import MeasurementNoise
+from observer.rowops import FLOATS
 
 from ..optics import (
     received_power,
@@ -28,6 +29,7 @@ from ..optics import (
     transmitter_gain,
     transmitter_gain_at,
 )
+from .incidence import incidence_geometry, incidence_rate
 from .world import LinkWorld, WorldError
 
 
@@ -147,27 +149,22 @@ class IrradianceSensor:
         return 1.0 - blocked / len(lengths)
 
     def geometry(self) -> tuple[list, list, list, list]:
-        """(d, theta, phi, visible fraction) of each photodiode at the current state.
-
-        Plain-float arithmetic on 3-vectors: several times faster than numpy at this size.
-        """
+        """(d, theta, phi, visible fraction) of each photodiode at the current state
+        (:func:`~ledsim.physics.incidence.incidence_geometry` in plain floats: several
+        times faster than numpy on 3-vectors)."""
         w = self.world
-        lx, ly, lz = w.led_pos.tolist()
-        ax, ay, az = w.led_rotation[:, 2].tolist()  # LED axis
-        hx, hy, hz = w.hinge_axis.tolist()
+        led = w.led_pos.tolist()
+        axis = w.led_rotation[:, 2].tolist()  # LED axis
+        hinge = w.hinge_axis.tolist()
         targets = self.aperture_points()
         dist, theta, phi, vis = [], [], [], []
         for i in self._photodiodes:
-            px, py, pz = w.photodiode_pos(i).tolist()
-            nx, ny, nz = w.photodiode_normal(i).tolist()
-            vx, vy, vz = lx - px, ly - py, lz - pz
-            d = math.sqrt(vx * vx + vy * vy + vz * vz)
-            vx, vy, vz = vx / d, vy / d, vz / d
-            cross_h = (ny * vz - nz * vy) * hx + (nz * vx - nx * vz) * hy + \
-                (nx * vy - ny * vx) * hz
-            phi.append(math.atan2(cross_h, nx * vx + ny * vy + nz * vz))
-            theta.append(math.acos(max(-1.0, min(1.0, -(ax * vx + ay * vy + az * vz)))))
+            d, t, p = incidence_geometry(FLOATS, led, axis, hinge,
+                                         w.photodiode_pos(i).tolist(),
+                                         w.photodiode_normal(i).tolist())
             dist.append(d)
+            theta.append(t)
+            phi.append(p)
             vis.append(self.visible_fraction(i, targets))
         return dist, theta, phi, vis
 
@@ -186,20 +183,26 @@ class IrradianceSensor:
         geo = self.geometry()
         clean = np.array([self._clean_power_at(*g) for g in zip(*geo, strict=True)])
         dist, theta, phi, vis = (np.array(v) for v in geo)
-        n, ref, w = len(clean), self._reference, self.world
+        ref, w = self._reference, self.world
         if self.constants.link is not None:  # a real receiver's cone: its elevation too
             clean = clean * self.elevation_response()
         if w.light_gain is not None:  # the light around the receiver (physics.light)
             clean = clean * w.light_gain
-        if noise and self.signal_noise:
-            power = self.measurement_noise.measure(clean, self.rng)
-        else:
-            power = clean + (self.rng.standard_normal(n) * self.noise_std if noise else 0.0)
-        if noise and w.light_noise is not None:
-            power = power + w.light_noise
+        power = self.noisy(clean) if noise else clean + 0.0
         return SensorReading(power, clean, phi, theta, dist, vis, float(phi[ref]),
                              self.incidence_rate(ref), w.gimbal_angle, w.gimbal_rate,
                              w.hull_pos.copy())
+
+    def noisy(self, clean: np.ndarray) -> np.ndarray:
+        """The measured powers [W] of the clean powers ``clean`` [W]: this reading's
+        noise drawn from :attr:`rng`, and the ambient light's watts."""
+        if self.signal_noise:
+            power = self.measurement_noise.measure(clean, self.rng)
+        else:
+            power = clean + self.rng.standard_normal(len(clean)) * self.noise_std
+        if self.world.light_noise is not None:
+            power = power + self.world.light_noise
+        return power
 
     def elevation(self) -> np.ndarray:
         """Each photodiode's LED elevation out of its turning plane [rad]: the angle
@@ -222,14 +225,8 @@ class IrradianceSensor:
 
     def incidence_rate(self, i: int) -> float:
         """d(phi_i)/dt [rad/s]: line-of-sight rotation minus photodiode rotation, about the
-        hinge axis (exact for rotations about that axis)."""
+        hinge axis (:func:`~ledsim.physics.incidence.incidence_rate`)."""
         w = self.world
-        lx, ly, lz = (w.led_pos - w.photodiode_pos(i)).tolist()
-        wx, wy, wz, vx, vy, vz = w.photodiode_velocity(i).tolist()
-        tx, ty, tz = w.transmitter_velocity.tolist()
-        rx, ry, rz = tx - vx, ty - vy, tz - vz
-        d2 = lx * lx + ly * ly + lz * lz
-        hx, hy, hz = w.hinge_axis.tolist()
-        los_rate = ((ly * rz - lz * ry) * hx + (lz * rx - lx * rz) * hy
-                     + (lx * ry - ly * rx) * hz) / d2
-        return los_rate - (wx * hx + wy * hy + wz * hz)
+        return incidence_rate((w.led_pos - w.photodiode_pos(i)).tolist(),
+                              w.photodiode_velocity(i).tolist(),
+                              w.transmitter_velocity.tolist(), w.hinge_axis.tolist())
