@@ -19,7 +19,7 @@ from concurrent.futures import ThreadPoolExecutor
 import mujoco
 import numpy as np
 
-from .tick import advance, prepare
+from .tick import OwnsThreads, advance, prepare
 from .world import RAY_GROUPS, LinkWorld
 
 
@@ -169,7 +169,7 @@ class WorldPoses:
 
 
 
-class WorldBatch(WorldPoses):
+class WorldBatch(WorldPoses, OwnsThreads):
     """N worlds advanced one control period at a time (their poses gathered after each).
 
     Args:
@@ -194,17 +194,6 @@ class WorldBatch(WorldPoses):
         for i in range(n):
             prepare(self.worlds[i], self.disturbances[i], self.time)
         self.gather()
-
-    def close(self) -> None:
-        if self._pool is not None:
-            self._pool.shutdown()
-            self._pool = None
-
-    def __enter__(self) -> WorldBatch:
-        return self
-
-    def __exit__(self, *exc) -> None:
-        self.close()
 
     def _advance(self, chunk: range, torques: list, t_next: float) -> None:
         for i in chunk:

@@ -59,7 +59,25 @@ def step_worlds(physics: PhysicsPass, worlds: Sequence[tuple[LinkWorld, Sequence
         vehicles.act_rows(vehicle_time)
 
 
-class PhysicsPass:
+class OwnsThreads:
+    """A context manager that owns a thread pool (``_pool``, None for one thread) and
+    shuts it down on :meth:`close`."""
+
+    _pool: ThreadPoolExecutor | None = None
+
+    def close(self) -> None:
+        if self._pool is not None:
+            self._pool.shutdown()
+            self._pool = None
+
+    def __enter__(self):
+        return self
+
+    def __exit__(self, *exc) -> None:
+        self.close()
+
+
+class PhysicsPass(OwnsThreads):
     """Step the physics of many worlds one control period each, split over ``threads``
     (1: in the calling thread). A context manager: it owns its threads.
 
@@ -88,14 +106,3 @@ class PhysicsPass:
         chunks = [worlds[i::self.threads] for i in range(self.threads)]
         for f in [self._pool.submit(self._step, c) for c in chunks]:
             f.result()
-
-    def close(self) -> None:
-        if self._pool is not None:
-            self._pool.shutdown()
-            self._pool = None
-
-    def __enter__(self) -> PhysicsPass:
-        return self
-
-    def __exit__(self, *exc) -> None:
-        self.close()
