@@ -294,3 +294,15 @@ def test_a_distance_the_shipped_kkl_does_not_serve_is_warned_about_and_flagged(t
                 "1", "--no-plot", "-q", "--out", str(tmp_path / "near"))
     assert r.returncode == 0 and "outside" not in r.stderr
     assert json.loads((tmp_path / "near" / "results.json").read_text())["distance_served"]
+
+
+def test_a_receiver_that_saturates_at_the_distance_is_warned_about(tmp_path):
+    # bluecomm-200's PMT: 1.02 uW at its peak at 9 m in coastal water, over its 1 uW full
+    # scale (the estimators then read phi 0.03 rad off); 0.2 uW at 20 m.
+    common = ("--link", "bluecomm-200", "--water", "coastal", "--seeds", "1", "--seconds",
+              "0.2", "--workers", "1", "--no-plot", "-q")
+    r = run_cli("run", *common, "--distance", "9", "--out", str(tmp_path / "near"))
+    assert r.returncode == 0, r.stderr
+    assert "saturates at --distance 9" in r.stderr and "1e-06 W" in r.stderr
+    r = run_cli("run", *common, "--distance", "20", "--out", str(tmp_path / "far"))
+    assert r.returncode == 0 and "saturates" not in r.stderr

@@ -1,5 +1,5 @@
-"""Checks and notes a command makes before it runs: the vehicle's flags and scene, and
-a distance the shipped KKL does not serve."""
+"""Checks and notes a command makes before it runs: the vehicle's flags and scene, a
+distance the shipped KKL does not serve, and a receiver that saturates."""
 
 from __future__ import annotations
 
@@ -39,11 +39,35 @@ def _check_vehicle(cfg) -> None:
                 "keeping (the hull drifts with the water)")
 
 
+def _warn_saturated(cfg) -> None:
+    """Say so when the receiver saturates at the run's distance: its peak power reaches
+    the full scale of its digitiser, so the aligned samples clip there, and the
+    estimators, whose model has no clipping, read a clipped pair of powers as an angle
+    off the peak (a biased phi)."""
+    from ..optics import peak_power
+
+    c = cfg.world_config().constants
+    digitiser = c.measurement_noise(cfg.noise_scale).digitiser
+    if digitiser is None:
+        return
+    peak = peak_power(c)
+    if peak >= digitiser.full_scale:
+        log.warning(f"the receiver saturates at --distance {cfg.distance:g}: its peak power "
+                    f"{peak:.3g} W reaches its digitiser's full scale of "
+                    f"{digitiser.full_scale:.3g} W, so aligned samples clip and the "
+                    "estimators (whose model does not clip) misread phi: expect a biased "
+                    "or lost estimate; a longer distance or murkier water keeps it in "
+                    "range")
+
+
 def _warn_unserved(cfg) -> None:
-    """Say so when the shipped KKL runs at a distance it is not measured to serve, and
-    when the link is too weak for the minimum-time acquisition it asks for."""
+    """Say so when the shipped KKL runs at a distance it is not measured to serve, when
+    the link is too weak for the minimum-time acquisition it asks for, and when the
+    receiver saturates (:func:`_warn_saturated`)."""
     from ..loop.estimation import SERVED_DISTANCES, served
     from ..loop.registry import PHYSICS_SCENARIOS
+
+    _warn_saturated(cfg)
 
     if not served(cfg):
         lo, hi = SERVED_DISTANCES

@@ -15,7 +15,7 @@ from pathlib import Path
 from ..errors import LedsimError
 from ..outputs import check_out_dir, check_out_file, output_folder, save_checkpoint
 from .budget_cmd import budget  # noqa: F401 (the budget command)
-from .checks import _check_vehicle, _vehicle, _warn_unserved
+from .checks import _check_vehicle, _vehicle, _warn_saturated, _warn_unserved
 from .export_cmd import export  # noqa: F401 (the export command)
 from .groups import resolved_distance
 from .replay_cmd import replay  # noqa: F401 (the replay command)
@@ -136,6 +136,7 @@ def demo(args) -> int:
             cfg.validate()
             if est == COMPARED_ESTIMATORS[0]:
                 _check_vehicle(cfg)
+                _warn_saturated(cfg)
             summary, trace = run_many(cfg, progress=not args.quiet)
             write_run(summary, trace, tmp / est)
             summaries.append(summary)
