@@ -125,6 +125,14 @@ def peak_power(c: LinkConstants) -> float:
     return float(np.max(photodiode_power(c.distance, c.theta, phi, c)))
 
 
+def receiver_saturates(c: LinkConstants, noise_scale: float = 1.0) -> bool:
+    """Whether the receiver saturates at the configured distance: the largest power one
+    photodiode can see there (:func:`peak_power`) reaches the full scale of its
+    digitiser (False without one: the paper's bench), so aligned samples clip."""
+    digitiser = c.measurement_noise(noise_scale).digitiser
+    return digitiser is not None and peak_power(c) >= digitiser.full_scale
+
+
 def nominal_noise_std(c: LinkConstants) -> float:
     """The pointing samples' noise at the configured distance's peak power [W]: the
     paper's constant noise, or a physical receiver's at that signal."""

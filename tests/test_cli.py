@@ -304,5 +304,9 @@ def test_a_receiver_that_saturates_at_the_distance_is_warned_about(tmp_path):
     r = run_cli("run", *common, "--distance", "9", "--out", str(tmp_path / "near"))
     assert r.returncode == 0, r.stderr
     assert "saturates at --distance 9" in r.stderr and "1e-06 W" in r.stderr
+    assert json.loads((tmp_path / "near" / "results.json").read_text())[
+        "receiver_saturates"] is True
     r = run_cli("run", *common, "--distance", "20", "--out", str(tmp_path / "far"))
     assert r.returncode == 0 and "saturates" not in r.stderr
+    assert json.loads((tmp_path / "far" / "results.json").read_text())[
+        "receiver_saturates"] is False

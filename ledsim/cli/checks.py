@@ -44,20 +44,18 @@ def _warn_saturated(cfg) -> None:
     the full scale of its digitiser, so the aligned samples clip there, and the
     estimators, whose model has no clipping, read a clipped pair of powers as an angle
     off the peak (a biased phi)."""
+    from ..loop.estimation import saturates
     from ..optics import peak_power
 
-    c = cfg.world_config().constants
-    digitiser = c.measurement_noise(cfg.noise_scale).digitiser
-    if digitiser is None:
-        return
-    peak = peak_power(c)
-    if peak >= digitiser.full_scale:
+    if saturates(cfg):
+        c = cfg.world_config().constants
+        peak, digitiser = peak_power(c), c.measurement_noise(cfg.noise_scale).digitiser
         log.warning(f"the receiver saturates at --distance {cfg.distance:g}: its peak power "
                     f"{peak:.3g} W reaches its digitiser's full scale of "
                     f"{digitiser.full_scale:.3g} W, so aligned samples clip and the "
                     "estimators (whose model does not clip) misread phi: expect a biased "
                     "or lost estimate; a longer distance or murkier water keeps it in "
-                    "range")
+                    "range (results.json: receiver_saturates true)")
 
 
 def _warn_unserved(cfg) -> None:

@@ -22,7 +22,7 @@ from observer.noise import MeasurementNoise
 
 from ..config import PAPER_DISTANCE
 from ..estimators import build_estimator
-from ..optics import peak_power
+from ..optics import peak_power, receiver_saturates
 from ..physics.scene import WorldConfig
 from ..physics.system import GimbalSystem, IdentifiedGimbalModel
 from ..radiometry.presets import kkl_reference_constants
@@ -52,6 +52,12 @@ def served(cfg: RunConfig) -> bool:
     measured across its range in docs/link_table.md)."""
     lo, hi = SERVED_DISTANCES
     return not uses_reference(cfg) or cfg.link != "paper" or lo <= cfg.distance <= hi
+
+
+def saturates(cfg: RunConfig) -> bool:
+    """Whether the run's receiver saturates at its distance
+    (:func:`~ledsim.optics.receiver_saturates`)."""
+    return receiver_saturates(cfg.world_config().constants, cfg.noise_scale)
 
 
 #: On a physical link, the scheduled KKL holds its gain while the motor works against

@@ -18,7 +18,7 @@ from ..results import DictAccess, write_json
 from .bound import bound_summary
 from .closed_loop import RunOutcome, Trace, check_checkpoint, run_batch
 from .config import RunConfig
-from .estimation import served
+from .estimation import saturates, served
 
 
 @dataclass
@@ -67,7 +67,9 @@ class RunSummary(DictAccess):
     power law's b [1/m] (a physical link's effective attenuation), ``received_power_w``
     photodiode 1's mean noise-free power [W] (``mean_power`` under its old name) and
     ``bit_rate`` the data's [bit/s] that ``snr_db``, ``ber``, ``throughput_bps`` and
-    ``fec_share`` are at; ``schema_version`` counts this layout's revisions."""
+    ``fec_share`` are at; ``receiver_saturates`` says whether the receiver's peak power
+    at the distance reaches its digitiser's full scale (its samples clip: the estimates
+    are biased); ``schema_version`` counts this layout's revisions."""
 
     scenario: str
     estimator: str
@@ -110,6 +112,7 @@ class RunSummary(DictAccess):
     outside_domain_share: Stat | None = None
     pcrb_steady_x1: float | None = None
     pcrb_steady_x2: float | None = None
+    receiver_saturates: bool = False
     rmse_over_pcrb_x1: float | None = None
     rmse_over_pcrb_x2: float | None = None
     rmse_over_pcrb_err_x1: float | None = None
@@ -165,7 +168,7 @@ def summarize(cfg: RunConfig, outs: list[RunOutcome]) -> RunSummary:
         throughput_bps=stat(lambda o: o.metrics.throughput_bps),
         fec_share=stat(lambda o: o.metrics.fec_share),
         bit_rate=cfg.data_bit_rate,
-        distance_served=served(cfg),
+        distance_served=served(cfg), receiver_saturates=saturates(cfg),
         filter_distance=cfg.filter_distance,
         link_events=[{"seed": k, "lost_recovered": o.metrics.link_events}
                      for k, o in enumerate(outs)],
