@@ -2,12 +2,12 @@
 
 :class:`WorldPoses` gathers what the sensors read from N worlds' ``MjData`` into (N, ...)
 arrays, whoever steps them (the closed loop's :class:`~ledsim.physics.tick.PhysicsPass`,
-or a batch). :class:`WorldBatch` holds one :class:`LinkWorld` per run, each with its own ``MjData``
-(and one shared ``MjModel`` unless a disturbance changes the model: a water current sets
-its medium velocity). One control period of every world is a single call: set the motor
-torques, ``mj_step`` through the substeps, apply each world's disturbances for the next
-step and update its kinematics. MuJoCo releases the GIL while it steps, so the worlds are
-split over ``threads`` threads. The poses the sensor needs
+or a batch). :class:`WorldBatch` holds one :class:`LinkWorld` per run, each with its
+own ``MjData`` (and one shared ``MjModel`` unless a disturbance changes the model: a
+water current sets its medium velocity). One control period of every world is a single
+call: set the motor torques, ``mj_step`` through the substeps, apply each world's
+disturbances for the next step and update its kinematics. MuJoCo releases the GIL while
+it steps, so the worlds are split over ``threads`` threads. The poses the sensor needs
 (:mod:`ledsim.physics.batch_sensor`) are then stacked into (N, ...) arrays.
 """
 
@@ -166,7 +166,6 @@ class WorldPoses:
         site)."""
         ang, lin = self.gimbal_cvel[:, :3], self.gimbal_cvel[:, 3:]
         return ang, lin - cross3(self.site_pos[:, self.reference] - self.root_com, ang)
-
 
 
 class WorldBatch(WorldPoses, OwnsThreads):

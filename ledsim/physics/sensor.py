@@ -173,15 +173,18 @@ class IrradianceSensor:
         c = self.constants
         return received_power(transmitter_gain(dist, theta, c), phi, c.receiver, vis)
 
-    def _clean_power_at(self, d: float, theta: float, phi: float, vis: float) -> float:
-        """:meth:`clean_power` of one photodiode in plain floats (the per-step path)."""
+    def clean_power_at(self, d, theta, phi, vis, o=FLOATS):
+        """:meth:`clean_power` of one photodiode in plain floats (the per-step path), or
+        with ``o`` :data:`~observer.rowops.ARRAYS` of many worlds' photodiodes, each
+        to one's last bit."""
         c = self.constants
-        return vis * transmitter_gain_at(d, theta, c) * receiver_response_at(phi, c.receiver)
+        return vis * transmitter_gain_at(d, theta, c, o) * \
+            receiver_response_at(phi, c.receiver, o)
 
     def read(self, noise: bool = True) -> SensorReading:
         """Sample every photodiode at the current MjData state."""
         geo = self.geometry()
-        clean = np.array([self._clean_power_at(*g) for g in zip(*geo, strict=True)])
+        clean = np.array([self.clean_power_at(*g) for g in zip(*geo, strict=True)])
         dist, theta, phi, vis = (np.array(v) for v in geo)
         ref, w = self._reference, self.world
         if self.constants.link is not None:  # a real receiver's cone: its elevation too

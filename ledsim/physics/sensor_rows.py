@@ -4,7 +4,7 @@ what its own :class:`~ledsim.physics.sensor.IrradianceSensor` reads alone.
 The poses come from every world's ``MjData`` in one gather
 (:class:`~ledsim.physics.batch.WorldPoses`); the geometry and the powers are the row
 kernels the single sensor runs in plain floats (:mod:`ledsim.physics.incidence`,
-:func:`~ledsim.optics.transmitter_gain_at`, :func:`~ledsim.optics.receiver_response_at`)
+:meth:`~ledsim.physics.sensor.IrradianceSensor.clean_power_at`)
 run over arrays with libm's functions per element (:data:`observer.rowops.ARRAYS`).
 Rays are cast only for the photodiodes that a light-blocking geom could shadow
 (:func:`~ledsim.physics.batch_sensor.needs_rays`): elsewhere no ray can be stopped, and
@@ -21,7 +21,6 @@ import numpy as np
 
 from observer.rowops import ARRAYS
 
-from ..optics import receiver_response_at, transmitter_gain_at
 from .batch import WorldPoses
 from .batch_sensor import needs_rays
 from .incidence import incidence_geometry, incidence_rate
@@ -73,9 +72,10 @@ class SensorRows:
                 vis[n] = s.visible_fraction(i, s.aperture_points())
             columns.append((d, theta, phi, vis))
         dist, theta, phi, vis = (np.stack(q, axis=1) for q in zip(*columns, strict=True))
-        clean = vis * transmitter_gain_at(dist, theta, c, o) * \
-            receiver_response_at(phi, c.receiver, o)
+        clean = self.sensors[0].clean_power_at(dist, theta, phi, vis, o)
         rates = self._reference_rates()
+        # The encoders and hulls as the gather read them (each world's own values).
+        angles, speeds, hulls = p.qpos_hinge.tolist(), p.qvel_hinge.tolist(), p.hull_pos.copy()
         readings = []
         for n, s in enumerate(self.sensors):
             w = s.world
@@ -87,7 +87,7 @@ class SensorRows:
             power = s.noisy(row)
             readings.append(SensorReading(power, row, phi[n], theta[n], dist[n], vis[n],
                                           float(phi[n, self.reference]), float(rates[n]),
-                                          w.gimbal_angle, w.gimbal_rate, w.hull_pos.copy()))
+                                          angles[n], speeds[n], hulls[n]))
         return readings
 
     def _reference_rates(self) -> np.ndarray:
