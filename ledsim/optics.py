@@ -193,6 +193,19 @@ def pair_shape_inverse(powers, c: LinkConstants) -> tuple[float, float, float]:
     return phi, gain, v
 
 
+def pair_phi_variance(phi: float, powers, noise_std: float, c: LinkConstants) -> float:
+    """Variance of the phi inverted from one pair of powers ``powers`` [W] with noise
+    ``noise_std`` [W] on each, at ``phi`` [rad]: the log-ratio's noise
+    sigma^2 (1/P1^2 + 1/P2^2) over its squared slope in phi there [rad^2] (inf where
+    the slope vanishes)."""
+    g1, dg1 = response_and_slope(phi, c.receiver)
+    g2, dg2 = response_and_slope(phi + c.dphi, c.receiver)
+    slope = dg1 / g1 - dg2 / g2
+    if slope == 0:
+        return math.inf
+    return noise_std * noise_std * sum(1.0 / (p * p) for p in powers) / (slope * slope)
+
+
 def response_and_slope(phi: float, r: ReceiverResponse) -> tuple[float, float]:
     """(g(phi), dg/dphi) for one angle, in plain floats (the per-step paths)."""
     terms = response_terms(phi, r, math.exp)

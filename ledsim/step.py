@@ -62,6 +62,12 @@ class Decision:
             it, or kept as it is: the oracle, a weak-light hand-over); the control law
             starts afresh.
         reason: why the link is lost ("" when it is not).
+        held: while the link is lost, the estimate the run reports instead of the
+            estimator's own ``xhat``: the last trusted one carried on the encoder (None:
+            the estimator's own stands, or nothing was trusted yet).
+        held_std: the standard deviation of ``held`` per state (that of the last
+            trusted estimate: the encoder carries it without adding to it; None: the
+            estimator has no covariance, or nothing is held).
     """
 
     xhat: np.ndarray
@@ -70,6 +76,13 @@ class Decision:
     u: float | None = None
     reseeded: bool = False
     reason: str = ""
+    held: np.ndarray | None = None
+    held_std: np.ndarray | None = None
+
+    @property
+    def reported(self) -> np.ndarray:
+        """The estimate the run reports: ``held`` while there is one, else ``xhat``."""
+        return self.xhat if self.held is None else self.held
 
 
 class Unsupervised:

@@ -69,8 +69,14 @@ class Estimator(ABC):
         estimator that adapts to it does (a bank picks its member, a gain-scheduled KKL
         sets its floor); ``y`` is the step's measurement (None: before the run, where a
         bank starts on its member at once). Returns the new estimate when adapting
-        changed it, else None. Estimators told their noise once (the EKF, UKF and
-        particle filter) keep it."""
+        changed it, else None. The Bayesian filters scale their measurement noise
+        covariance by its square (:class:`GaussianFilter`, the particle filter)."""
+        return None
+
+    def covariance(self) -> np.ndarray | None:
+        """How sure the last estimate is: its covariance ``(n_state, n_state)`` in the
+        state's units squared, or None for an estimator without one (the KKL). Not to be
+        modified."""
         return None
 
     def initial_guess(self, x0) -> np.ndarray:
@@ -118,12 +124,25 @@ class GaussianFilter(Estimator):
         self.signal_noise = noise is not None and noise.signal_dependent
         self.P0 = self.initial_covariance() if P0 is None else np.asarray(P0, dtype=float)
         self.lost_nis, self.lost_steps = lost_nis, lost_steps
+        #: The measurement noise over the model's [-] (:meth:`adapt_noise`): the sensor's
+        #: at the run's noise scale and gain, and what a fading channel adds.
+        self.noise_scale = 1.0
         self.reset()
 
-    def R_at(self, y_pred: np.ndarray, ok: np.ndarray) -> np.ndarray:
-        """R over the usable outputs ``ok`` at the predicted output ``y_pred``."""
+    def adapt_noise(self, noise_ratio: float, y: np.ndarray | None = None) -> None:
+        """R becomes the model's times ``noise_ratio`` squared; the estimate stays."""
+        self.noise_scale = float(noise_ratio)
+        return None
+
+    def R_at(self, y_pred: np.ndarray | None, ok: np.ndarray) -> np.ndarray:
+        """R over the usable outputs ``ok`` at the predicted output ``y_pred`` (needed
+        only where the noise depends on the output)."""
         R = self.system.measurement_noise.covariance(y_pred) if self.signal_noise else self.R
-        return R[np.ix_(ok, ok)]
+        R = R[np.ix_(ok, ok)]
+        return R if self.noise_scale == 1.0 else R * (self.noise_scale * self.noise_scale)
+
+    def covariance(self) -> np.ndarray:
+        return self.P
 
     def reset(self, x0=None, covariance=None) -> None:
         self.x = self.initial_guess(x0)

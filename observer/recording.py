@@ -83,6 +83,9 @@ class RecordingEstimator(Estimator):
     def outside_domain(self) -> bool:
         return self.inner.outside_domain
 
+    def covariance(self):
+        return self.inner.covariance()
+
     def seed_run(self, seed: int) -> None:
         self.record.add("seed_run", [seed])
         self.inner.seed_run(seed)

@@ -23,7 +23,7 @@ import numpy as np  # noqa: E402
 from tqdm.auto import tqdm  # noqa: E402
 
 from ledsim.loop.config import RunConfig  # noqa: E402
-from ledsim.loop.metrics import SILENT_ERROR  # noqa: E402
+from ledsim.loop.losses import SILENT_ERROR  # noqa: E402
 from ledsim.loop.report import run_seeds  # noqa: E402
 from ledsim.outputs import atomic_write_text  # noqa: E402
 

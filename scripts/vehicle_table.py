@@ -23,7 +23,8 @@ import argparse
 from pathlib import Path
 
 from ledsim.loop.config import COMPARED_ESTIMATORS, RunConfig
-from ledsim.loop.report import TABLE_HEADER, format_summary, run_many
+from ledsim.loop.report import run_many
+from ledsim.loop.table import TABLE_HEADER, format_summary
 from ledsim.outputs import atomic_write_text
 from ledsim.results import to_jsonable, write_json
 

@@ -62,7 +62,7 @@ def test_ledsim_run_writes_the_link_budget(tmp_path, link):
         assert set(res[key]) == {"mean", "std", "n"} and res[key]["n"] == 2, key
     rate = BIT_RATE if link == "paper" else LINK_PRESETS[DEFAULT_LINK].bit_rate
     assert res["bit_rate"] == rate and res["link"] == (link or DEFAULT_LINK)
-    assert res["schema_version"] == 2
+    assert res["schema_version"] == 3
     assert res["received_power_w"] == res["mean_power"]
     assert 0 < res["fec_share"]["mean"] <= 1
     assert res["throughput_bps"]["mean"] == pytest.approx(rate * res["fec_share"]["mean"])

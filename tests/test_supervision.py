@@ -14,7 +14,8 @@ from ledsim.loop.config import RunConfig
 from ledsim.loop.metrics import link_events
 from ledsim.optics import _SHAPE_PHI, _shape_table, pair_power, pair_shape_inverse
 from ledsim.paper.model import LEDLinkModel
-from observer.supervision import GainTracker, ResidualMonitor
+from observer.gain_tracking import GainTracker
+from observer.supervision import ResidualMonitor
 
 C = LinkConstants()
 

@@ -13,7 +13,8 @@ from ledsim.errors import LedsimError
 from ledsim.loop.closed_loop import run_batch, run_once
 from ledsim.loop.config import RunConfig, navigation_noise
 from ledsim.loop.metrics import run_metrics
-from ledsim.loop.report import recovered, summarize
+from ledsim.loop.report import summarize
+from ledsim.loop.table import recovered
 from ledsim.physics.disturbances import DisturbanceError, parse_disturbance
 
 

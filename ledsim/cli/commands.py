@@ -96,7 +96,8 @@ def simulate(args) -> int:
 
 
 def run(args) -> int:
-    from ..loop.report import TABLE_HEADER, format_summary, run_seeds, write_run, write_traces
+    from ..loop.report import run_seeds, write_run, write_traces
+    from ..loop.table import TABLE_HEADER, format_summary
 
     cfg = _loop_config(args)
     out = check_out_dir(args.out)
@@ -121,7 +122,8 @@ def run(args) -> int:
 def demo(args) -> int:
     """Align the receiver from 0.3 rad off with each estimator; print one table."""
     from ..loop.config import COMPARED_ESTIMATORS, RunConfig
-    from ..loop.report import TABLE_HEADER, format_summary, run_many, write_run
+    from ..loop.report import run_many, write_run
+    from ..loop.table import TABLE_HEADER, format_summary
     from ..outputs import atomic_write_text
     from ..results import write_json
 

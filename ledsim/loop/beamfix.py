@@ -7,7 +7,7 @@ import math
 from collections import deque
 
 from ..config import LinkConstants
-from ..optics import pair_shape_inverse, response_and_slope
+from ..optics import pair_phi_variance, pair_shape_inverse
 
 __all__ = ["BeamFix"]
 
@@ -48,10 +48,11 @@ class BeamFix:
     def samples(self) -> int:
         return len(self._samples)
 
-    def add(self, y, q: float, noise_std: float) -> bool:
+    def add(self, y, q: float, noise_std: float, extra_variance: float = 0.0) -> bool:
         """Take the powers ``y`` [W] measured at encoder angle ``q`` [rad] with noise
-        ``noise_std`` [W] (one call a control step, usable or not); True when the sample
-        was usable."""
+        ``noise_std`` [W] (one call a control step, usable or not), whose inverted phi
+        also carries ``extra_variance`` [rad^2] that the noise does not explain (a
+        fading channel's, on the pair's shape); True when the sample was usable."""
         self._step += 1
         while self._samples and self._step - self._samples[0][0] > self.memory_steps:
             self._samples.popleft()
@@ -62,7 +63,7 @@ class BeamFix:
         phi, gain, _ = pair_shape_inverse(powers, self.c)
         if not abs(phi) <= self.max_phi:
             return False
-        var = self.phi_variance(phi, powers, noise_std)
+        var = self.phi_variance(phi, powers, noise_std) + extra_variance
         if not var > 0 or not math.isfinite(var):
             return False
         target = q + phi - self.phi_ref
@@ -75,12 +76,7 @@ class BeamFix:
     def phi_variance(self, phi: float, powers, noise_std: float) -> float:
         """Variance of one sample's inverted phi [rad^2]: the log-ratio's noise
         sigma^2 (1/P1^2 + 1/P2^2) over its squared slope in phi there (``powers`` [W])."""
-        g1, dg1 = response_and_slope(phi, self.c.receiver)
-        g2, dg2 = response_and_slope(phi + self.c.dphi, self.c.receiver)
-        slope = dg1 / g1 - dg2 / g2
-        if slope == 0:
-            return math.inf
-        return noise_std * noise_std * sum(1.0 / (p * p) for p in powers) / (slope * slope)
+        return pair_phi_variance(phi, powers, noise_std, self.c)
 
     def _weighted_mean(self, column: int) -> float | None:
         """The inverse-variance weighted mean of a sample column (None: no sample)."""

@@ -146,8 +146,11 @@ class LoopRun:
         self.power = np.empty((steps, npd))
         self.clean = np.empty((steps, npd))
         self.applied = np.empty(steps)
-        self.xhat = np.empty((steps, nx))
+        self.xhat = np.empty((steps, nx))  # what the run reports (held while lost)
+        self.own = np.empty((steps, nx))  # the estimator's own estimate
+        self.xhat_std = np.full((steps, nx), np.nan)  # the held estimate's std (NaN: none)
         self.flags = np.zeros((steps, 2), dtype=bool)  # lost, acquiring
+        self.reseeded = np.zeros(steps, dtype=bool)  # the supervisor restarted the estimator
         # What the estimator was told and given (for the bound): u [rad/s^2], samples.
         self.u = np.zeros(steps)
         self.measured = np.ones((steps, npd), dtype=bool)
@@ -178,8 +181,12 @@ class LoopRun:
         torque = self.step(r.power, t, r.gimbal_angle, r.gimbal_rate, los)
         self.spent += time.perf_counter() - t0
         d = self.step.decision
-        self.xhat[k] = d.xhat
+        self.xhat[k] = d.reported
+        self.own[k] = d.xhat
+        if d.held_std is not None:
+            self.xhat_std[k] = d.held_std
         self.flags[k] = d.lost, d.acquiring
+        self.reseeded[k] = d.reseeded
         self.u[k] = self.step.u
         self.measured[k] = np.isfinite(self.step.y_gated)
         self.outside[k] = self.step.supervisor.outside_domain
@@ -271,7 +278,8 @@ class ClosedLoop:
                         None if run.given is None else
                         run.given.series(run.step.estimator, self.cfg, run.u,
                                          run.measured), run.noise,
-                        (self.model, run.u, run.measured), run.outside, run.medium)
+                        (self.model, run.u, run.measured), run.outside, run.medium,
+                        own=run.own, reseeded=run.reseeded, xhat_std=run.xhat_std)
                 for i, run in enumerate(runs)]
 
 

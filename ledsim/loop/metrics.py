@@ -15,6 +15,7 @@ from ..control import intensity_maximum
 from ..linkbudget import BIT_RATE, link_budget_of
 from ..optics import peak_power
 from ..results import DictAccess
+from .losses import StepFlags, step_flags
 
 ALIGN_TOLERANCE = math.radians(1.0)  # |phi - phi_ref| below this counts as aligned [rad]
 #: The link is available while P1 >= 90% of its maximum: a pointing loss of at most
@@ -77,6 +78,15 @@ class RunMetrics(DictAccess):
         outside_domain_share: share of the run after the warm-up in which the
             estimator said its estimate or its input was outside its training box (a
             learned observer extrapolating: ``Estimator.outside_domain``) [-].
+        loss_events: losses the supervisor declared after the link was first acquired
+            (a run that starts lost, acquiring, does not count its start) [-].
+        false_loss_events: those of them declared while the geometry allowed the link
+            (:func:`availability_mask`), no occluder shaded a photodiode, and the
+            estimator's own estimate of phi was within FALSE_LOSS_ERROR of the truth:
+            the data still explained the estimate [-].
+        reseeds: times the supervisor restarted the estimator (re-seeded it from a fix
+            of the beam or handed over after an acquisition, the run's first
+            included) [-].
     """
 
     rmse: dict
@@ -98,10 +108,9 @@ class RunMetrics(DictAccess):
     navigation_error_rms: float | None = None
     pointing_loss_db: float | None = None
     outside_domain_share: float = 0.0
-
-
-#: An estimate of phi this far off [rad] with the lost flag down is a silent error.
-SILENT_ERROR = 0.2
+    loss_events: int = 0
+    false_loss_events: int = 0
+    reseeds: int = 0
 
 
 def link_events(lost: np.ndarray, Te: float) -> list[list]:
@@ -143,7 +152,8 @@ def run_metrics(x: np.ndarray, xhat: np.ndarray, power_clean: np.ndarray, steady
                 noise_std: float | None = None, warmup: float = 0.0,
                 occluded: np.ndarray | None = None,
                 outside: np.ndarray | None = None, noise: MeasurementNoise | None = None,
-                bit_rate: float = BIT_RATE) -> RunMetrics:
+                bit_rate: float = BIT_RATE, steps: StepFlags | None = None
+                ) -> RunMetrics:
     """Metrics of one run from its true state, estimate and noise-free powers.
 
     Args:
@@ -165,6 +175,9 @@ def run_metrics(x: np.ndarray, xhat: np.ndarray, power_clean: np.ndarray, steady
             (None: never).
         noise: the run's noise object, for a link budget whose noise depends on the
             signal (None: ``noise_std``'s); ``bit_rate``: the data's [bit/s].
+        steps: what each step was (:func:`step_flags`, which judges the losses from
+            the estimator's own estimates, the shading and the re-seeds; None: from
+            ``lost`` and ``xhat`` alone, unshaded, no re-seeds).
     """
     Te = constants.Te
     e = rmse(xhat, x)
@@ -188,10 +201,10 @@ def run_metrics(x: np.ndarray, xhat: np.ndarray, power_clean: np.ndarray, steady
     if noise is None and noise_std is not None:
         noise = MeasurementNoise(noise_std)
     budget = {} if noise is None else asdict(link_budget_of(p1, noise, Te, bit_rate))
-    flagged = np.zeros(len(x), bool) if lost is None else np.asarray(lost, dtype=bool)
-    wrong = (np.abs(lay.angle(xhat) - lay.angle(x)) > SILENT_ERROR) & ~flagged
-    after = np.arange(len(x)) * Te >= warmup
-    silent = float(np.mean(wrong[after])) if after.any() else 0.0
+    if steps is None:
+        steps = step_flags(x, xhat, lay, Te, warmup, lost, possible=possible)
+    after = steps.counted
+    silent = float(np.mean(steps.silent[after])) if after.any() else 0.0
     pointed = after & possible & (True if occluded is None else ~np.asarray(occluded))
     loss = pointing_loss_db(best, p1, pointed)
     return RunMetrics(
@@ -205,7 +218,9 @@ def run_metrics(x: np.ndarray, xhat: np.ndarray, power_clean: np.ndarray, steady
         link_events=events, detection_delay=delay, geometry_share=float(np.mean(possible)),
         silent_error_share=silent, pointing_loss_db=None if math.isnan(loss) else loss,
         outside_domain_share=0.0 if outside is None or not after.any()
-        else float(np.mean(np.asarray(outside)[after])), **budget)
+        else float(np.mean(np.asarray(outside)[after])),
+        loss_events=int(steps.onset.sum()), false_loss_events=int(steps.false_onset.sum()),
+        reseeds=int(steps.reseeded.sum()), **budget)
 
 
 def _recovery(available: np.ndarray, Te: float, end: float, start: float) -> float | None:

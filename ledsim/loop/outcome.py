@@ -17,7 +17,7 @@ from ..linkbudget import BIT_RATE
 from ..results import DictAccess
 from .bound import run_terms
 from .config import RunConfig
-from .metrics import RunMetrics, run_metrics
+from .metrics import RunMetrics, availability_mask, run_metrics, step_flags
 from .windows import WindowMetrics, horizontal_rms, window_metrics
 
 
@@ -31,7 +31,10 @@ class Trace(DictAccess):
         blocked; lost (N,): the supervisor did not trust the estimate; acquiring (N,):
         its acquisition scan had the motor; given: what the estimator was given (None:
         not kept; :mod:`ledsim.loop.given`), series by name; layout: the receiver that
-        names the state's and the powers' series (None: the paper's).
+        names the state's and the powers' series (None: the paper's); own: the
+        estimator's own estimate where ``xhat`` holds the held one while lost, and
+        xhat_std the reported estimate's standard deviation (NaN: unknown) (None: not
+        kept).
     """
 
     t: np.ndarray
@@ -45,18 +48,27 @@ class Trace(DictAccess):
     acquiring: np.ndarray | None = None
     given: dict | None = None
     layout: ReceiverLayout | None = None
+    own: np.ndarray | None = None
+    xhat_std: np.ndarray | None = None
 
     def series(self) -> dict[str, np.ndarray]:
         """The trace as 1-D arrays in SI units, one row per control step: ``t`` [s],
         ``phi``, ``phi_hat`` [rad], ``phidot``, ``phidot_hat`` [rad/s], ``p1``, ``p2``
-        (measured powers [W]), ``torque`` [N m], ``lost`` (bool); and, when kept, what the
-        estimator was given (:meth:`ledsim.loop.given.GivenRecord.series`)."""
+        (measured powers [W]), ``torque`` [N m], ``lost`` (bool); when kept, the
+        estimator's own estimates ``phi_own``, ``phidot_own`` and the reported ones'
+        standard deviations ``phi_hat_std``, ``phidot_hat_std`` (NaN: unknown); and what
+        the estimator was given (:meth:`ledsim.loop.given.GivenRecord.series`)."""
         n = len(self.t)
         lost = np.zeros(n, dtype=bool) if self.lost is None else np.asarray(self.lost)
         lay = LinkConstants().layout if self.layout is None else self.layout
+        extra = {}
+        if self.own is not None:
+            extra.update(lay.state_columns(self.own, "_own"))
+        if self.xhat_std is not None:
+            extra.update(lay.state_columns(self.xhat_std, "_hat_std"))
         return {"t": self.t, **lay.state_columns(self.x), **lay.state_columns(self.xhat, "_hat"),
                 **lay.power_columns(self.power), "torque": self.torque,
-                "lost": lost, **(self.given or {})}
+                "lost": lost, **extra, **(self.given or {})}
 
 
 @dataclass
@@ -102,7 +114,9 @@ def outcome(res, xhat: np.ndarray, flags: np.ndarray, cfg: RunConfig, constants,
             window: float | None = None, station_keeping: bool | None = None,
             given: dict | None = None, noise=None, bound_inputs=None,
             outside: np.ndarray | None = None,
-            medium: np.ndarray | None = None) -> RunOutcome:
+            medium: np.ndarray | None = None, *, own: np.ndarray | None = None,
+            reseeded: np.ndarray | None = None,
+            xhat_std: np.ndarray | None = None) -> RunOutcome:
     """A run's :class:`RunOutcome` from its simulation result, its estimates, its
     (lost, acquiring) flags per step, the seconds spent controlling and in all, its
     vehicle's :class:`Navigation` (None: no vehicle) and the window [s] of per-window
@@ -111,7 +125,10 @@ def outcome(res, xhat: np.ndarray, flags: np.ndarray, cfg: RunConfig, constants,
     step told them [rad/s^2], the samples the gate passed) for the bound (None: none);
     ``outside``: the steps whose estimator was outside its training box (None: none);
     ``medium``: the water's factor on the reference photodiode's power each step
-    (scintillation; None: 1)."""
+    (scintillation; None: 1). ``own``: the estimator's own estimates where ``xhat``
+    holds the held ones while lost (None: ``xhat``); ``reseeded``: the steps the
+    supervisor restarted the estimator (None: none); ``xhat_std``: the reported
+    estimate's standard deviation per step (NaN where unknown; None: not kept)."""
     events = [d for d in disturbances if d.event_end is not None]
     flags = flags.reshape(-1, 2)
     best = achievable_power(res, constants)
@@ -127,6 +144,12 @@ def outcome(res, xhat: np.ndarray, flags: np.ndarray, cfg: RunConfig, constants,
             bound = None  # no process noise: the bound is not defined
     noise_model, bit_rate = noise, getattr(cfg, "data_bit_rate", BIT_RATE)
     noise = noise.std
+    lay, warmup = constants.layout, cfg.scenario_spec.warmup
+    _, possible = availability_mask(lay.reference_power(res.power_clean), best, noise)
+    steps = step_flags(res.x, xhat, lay, constants.Te, warmup,
+                       flags[:, 0] if supervised else None, own, possible,
+                       np.asarray(res.occluded).reshape(len(res.t), -1).any(axis=1),
+                       reseeded)
     metrics = run_metrics(res.x, xhat, res.power_clean, cfg.steady_from,
                           constants, events[0].event_end if events else None,
                           lost=flags[:, 0] if supervised else None,
@@ -134,17 +157,18 @@ def outcome(res, xhat: np.ndarray, flags: np.ndarray, cfg: RunConfig, constants,
                           power_max=best, noise_std=noise,
                           warmup=cfg.scenario_spec.warmup,
                           occluded=constants.layout.reference_power(res.occluded),
-                          outside=outside, noise=noise_model, bit_rate=bit_rate)
+                          outside=outside, noise=noise_model, bit_rate=bit_rate,
+                          steps=steps)
     nav = navigation
     if nav is not None and len(res.t):
         metrics.hull_error_rms = horizontal_rms(nav.hull, nav.station)
         metrics.navigation_error_rms = horizontal_rms(nav.navigated, nav.hull)
     windows = None if window is None else window_metrics(
         constants.layout.reference_power(res.power_clean), best, noise, constants.Te, window,
-        *(() if nav is None else nav), noise=noise_model, bit_rate=bit_rate)
+        *(() if nav is None else nav), noise=noise_model, bit_rate=bit_rate, steps=steps)
     trace = Trace(res.t, res.x, xhat, res.power, res.power_clean, res.torque,
                   res.occluded, flags[:, 0], flags[:, 1], given,
-                  constants.layout) if keep_trace else None
+                  constants.layout, own, xhat_std) if keep_trace else None
     return RunOutcome(metrics, 1e6 * spent / len(res.t) if len(res.t) else 0.0,
                       res.t[-1] / wall if len(res.t) else 0.0, trace, windows,
                       station_keeping, bound)

@@ -1,4 +1,5 @@
-"""Monte-Carlo over seeds of the closed loop, its summary, table row and files."""
+"""Monte-Carlo over seeds of the closed loop, its summary and files (its printed table:
+:mod:`ledsim.loop.table`)."""
 
 from __future__ import annotations
 
@@ -13,7 +14,6 @@ from observer.metrics import mean_and_spread
 
 from ..montecarlo import run_jobs
 from ..outputs import atomic_write_bytes
-from ..physics.disturbances import parse_disturbance
 from ..results import DictAccess, write_json
 from .bound import bound_summary
 from .closed_loop import RunOutcome, Trace, check_checkpoint, run_batch
@@ -41,8 +41,9 @@ class Stat(DictAccess):
 
 
 #: Revision of ``results.json``'s layout: 2 added the physical link's keys (``link``,
-#: ``water``, ``attenuation``, ``received_power_w``) and this one.
-SCHEMA_VERSION = 2
+#: ``water``, ``attenuation``, ``received_power_w``) and this one; 3 the losses
+#: (``loss_events``, ``false_loss_events``, ``reseeds``, and the windows' estimate).
+SCHEMA_VERSION = 3
 
 
 @dataclass
@@ -69,7 +70,12 @@ class RunSummary(DictAccess):
     ``bit_rate`` the data's [bit/s] that ``snr_db``, ``ber``, ``throughput_bps`` and
     ``fec_share`` are at; ``receiver_saturates`` says whether the receiver's peak power
     at the distance reaches its digitiser's full scale (its samples clip: the estimates
-    are biased); ``schema_version`` counts this layout's revisions."""
+    are biased); ``schema_version`` counts this layout's revisions; ``loss_events``,
+    ``false_loss_events`` and ``reseeds`` count the losses the supervisor declared
+    after the first acquisition, those that the data did not call for (the geometry
+    allowed the link, no occluder shaded it, and the estimator's own phi was within 0.1
+    rad of the truth), and the estimator's restarts, per seed
+    (:class:`~ledsim.loop.metrics.RunMetrics`)."""
 
     scenario: str
     estimator: str
@@ -125,11 +131,15 @@ class RunSummary(DictAccess):
     depth: float | None = None
     transmitter_depth: float | None = None
     receiver_dome: bool | None = None
+    loss_events: Stat | None = None
+    false_loss_events: Stat | None = None
+    reseeds: Stat | None = None
 
 
 #: The per-window metrics a summary gives over the seeds (:class:`WindowMetrics`).
 WINDOW_KEYS = ("availability", "fec_share", "mean_power", "hull_error_rms",
-               "navigation_error_rms")
+               "navigation_error_rms", "rmse_x1", "lost_share", "silent_error_share",
+               "loss_events", "false_loss_events", "reseeds")
 
 
 def summarize_windows(outs: list[RunOutcome]) -> list[dict] | None:
@@ -190,7 +200,10 @@ def summarize(cfg: RunConfig, outs: list[RunOutcome]) -> RunSummary:
         attenuation=constants.attenuation,
         received_power_w=stat(lambda o: o.metrics.mean_power),
         depth=cfg.depth, transmitter_depth=cfg.transmitter_depth,
-        receiver_dome=cfg.receiver_dome)
+        receiver_dome=cfg.receiver_dome,
+        loss_events=stat(lambda o: o.metrics.loss_events),
+        false_loss_events=stat(lambda o: o.metrics.false_loss_events),
+        reseeds=stat(lambda o: o.metrics.reseeds))
 
 
 #: The most seeds one job steps together (a batch): larger batches gain little more
@@ -263,38 +276,3 @@ def write_run(summary: RunSummary, trace: Trace | None, out: Path,
         paths.append(plot_run(trace, f"{summary.scenario} with {summary.estimator} — {dist}",
                               summary.estimator, out / "run.png"))
     return paths
-
-
-TABLE_HEADER = ("| scenario | disturbance | estimator | x1 RMSE [rad] | x2 RMSE [rad/s] "
-                "| align time [s] | availability | FEC share | mean P1 [W] | recovery [s] "
-                "| RTF | x1/PCRB | pointing loss [dB] |"
-                "\n|---|---|---|---|---|---|---|---|---|---|---|---|---|")
-
-
-def recovered(s: RunSummary) -> str:
-    """The recovery cell: mean time [s] and how many seeds recovered, ``0.52 (2/4)``;
-    ``- (0/4)`` when none did; ``-`` without an event."""
-    if s.recovery_time.mean is None:
-        return f"- (0/{s.seeds})" if _has_event(s) else "-"
-    return f"{s.recovery_time.mean:.2f} ({s.recovery_time.n}/{s.seeds})"
-
-
-def _has_event(s: RunSummary) -> bool:
-    return any(parse_disturbance(d).event_end is not None for d in s.disturbances)
-
-
-def format_summary(s: RunSummary, first_cell: str | None = None) -> str:
-    """One markdown row of :data:`TABLE_HEADER` (``first_cell``: instead of the scenario;
-    x1/PCRB is the steady phi RMSE over the root of the posterior Cramér-Rao bound)."""
-    def f(stat: Stat, fmt="{:.2e}"):
-        return "-" if stat.mean is None else fmt.format(stat.mean)
-
-    return (f"| {first_cell or s.scenario} | {', '.join(s.disturbances) or '-'} "
-            f"| {s.estimator} | {f(s.rmse_steady_x1)} | {f(s.rmse_steady_x2)} "
-            f"| {f(s.alignment_time, '{:.2f}')} | {f(s.availability, '{:.3f}')} "
-            f"| {f(s.fec_share, '{:.3f}')} "
-            f"| {f(s.mean_power, '{:.3f}' if s.link == 'paper' else '{:.2e}')} "
-            f"| {recovered(s)} "
-            f"| {f(s.realtime_factor, '{:.0f}')} "
-            f"| {'-' if s.rmse_over_pcrb_x1 is None else f'{s.rmse_over_pcrb_x1:.2f}'} "
-            f"| {f(s.pointing_loss_db or Stat(None, None, 0), '{:.3f}')} |")

@@ -168,12 +168,13 @@ class FastAcquisition:
         return self.dark >= self.dark_steps and not self.moving
 
     def step(self, y, q: float, qdot: float, noise_std: float,
-             estimate: float | None = None):
+             estimate: float | None = None, extra_variance: float = 0.0):
         """(u [rad/s^2] or None, seed) for the powers ``y`` [W] at encoder angle ``q``
-        [rad] and rate ``qdot`` [rad/s] with noise ``noise_std`` [W]. u None: the
-        beam is out of view (the caller scans); seed: (phi [rad], phidot [rad/s]) to
+        [rad] and rate ``qdot`` [rad/s] with noise ``noise_std`` [W] (and
+        ``extra_variance`` [rad^2] on each sample's phi: :meth:`BeamFix.add`). u None:
+        the beam is out of view (the caller scans); seed: (phi [rad], phidot [rad/s]) to
         restart the estimator from on arrival (None: not yet)."""
-        seen = self.fix.add(y, q, noise_std)
+        seen = self.fix.add(y, q, noise_std, extra_variance)
         self.dark = 0 if seen else self.dark + 1
         log = self.log[-1]
         log.steps += 1

@@ -1,7 +1,7 @@
 """Link supervision: the same layer over every estimator (KKL, EKF, UKF, PF).
 
 Each control step the supervisor rescales the powers to the estimator's model gain
-(:class:`~observer.supervision.GainTracker`: distance and LED angle scale both
+(:class:`~observer.gain_tracking.GainTracker`: distance and LED angle scale both
 photodiodes alike), runs the estimator, and checks its estimate against the
 measurements (:class:`~observer.supervision.ResidualMonitor`). While the link is trusted
 it remembers the gimbal's encoder angle. Once it is lost (after the warm-up) it takes
@@ -12,19 +12,28 @@ the gain; then the control law has the motor again.
 
 from __future__ import annotations
 
+import math
 from collections import deque
 
 import numpy as np
 
 from observer.estimator import Estimator
+from observer.gain_tracking import GainTracker
 from observer.occlusion import EncoderCarry
-from observer.supervision import GainTracker, ResidualMonitor
+from observer.supervision import ResidualMonitor
 
 from ..config import LinkConstants
 from ..control import intensity_maximum
-from ..optics import layout_power, nominal_noise_std, pair_shape_inverse, peak_power
+from ..optics import (
+    layout_power,
+    nominal_noise_std,
+    pair_phi_variance,
+    pair_shape_inverse,
+    peak_power,
+)
 from ..step import Decision
 from .acquisition import AcquisitionScan
+from .held import SEED_RATE_STD, HeldEstimate
 from .slew import FastAcquisition
 
 #: The scan of a fast acquisition: it only has to bring the beam into view, so it sweeps
@@ -34,9 +43,6 @@ from .slew import FastAcquisition
 FAST_SCAN = {"speed": 2.0, "widen": 0.4, "dwell": 2.0}
 #: Encoder angle [rad] within which a never-lit gimbal is at its centre and scans.
 CENTRE_REACHED = 0.05
-#: Standard deviation of a fast acquisition's re-seeded phidot [rad/s]: the encoder's
-#: rate, off by the hull's own turning that the line of sight does not remove.
-SEED_RATE_STD = 0.05
 
 
 def model_gain(model, constants: LinkConstants) -> float:
@@ -56,7 +62,7 @@ BLIND_TRAVEL = 0.2
 #: A sample held this long [s] is an occlusion, for the encoder to carry the estimate.
 DEAD_RECKON_AFTER = 0.05
 #: The gain tracker's deadband on the bench, whose pointing samples carry 3.2 % noise
-#: (``observer.supervision.GainTracker``) [-].
+#: (``observer.gain_tracking.GainTracker``) [-].
 BENCH_DEADBAND = 0.005
 
 
@@ -109,7 +115,9 @@ class LinkSupervisor:
         band = tracker_deadband(constants)
         self.gain = GainTracker(model, lambda y: pair_shape_inverse(y, constants),
                                 model_gain(model, constants), ratio=gain_ratio,
-                                deadband=band, deadband_moving=band)
+                                deadband=band, deadband_moving=band,
+                                phi_variance=lambda phi, y, sigma: pair_phi_variance(
+                                    phi, y, sigma, constants))
         self.fast = None
         if fast is not None and reacquire:
             self.fast = FastAcquisition(constants, inertia, fast, intensity_maximum(constants))
@@ -122,6 +130,13 @@ class LinkSupervisor:
         self.carry = EncoderCarry(constants.Te, DEAD_RECKON_AFTER) if dead_reckon else None
         self._angle = constants.layout.angle
         self._started = False
+        # The model's nominal noise [W, model's gain], and the variance of phi that one
+        # unit of it on each power gives at the alignment target [rad^2].
+        self._nominal_std = float(np.mean(model.measurement_noise_std))
+        target = intensity_maximum(constants)
+        self._phi_variance_per_noise = pair_phi_variance(
+            target, model.h(np.array([target, 0.0])), self._nominal_std, constants)
+        self.held = HeldEstimate(estimator, self.fast, self._angle, self.trusted_q.maxlen)
 
     @property
     def outside_domain(self) -> bool:
@@ -136,9 +151,21 @@ class LinkSupervisor:
 
     def noise_ratio(self) -> float:
         """Measurement noise in the model's gain over the model's nominal noise [-]: the
-        sensor's noise over the tracked gain. (Not the monitor's learned noise: fast
-        motion, such as a vibrating hull, inflates that and would pick a slow member.)"""
-        return float(self.sensor_noise / self.gain.ratio)
+        sensor's noise over the tracked gain, and what a fading channel adds to the
+        pair's shape (:attr:`~observer.fading.FadingChannel.shape_variance`, as the
+        noise on each power that would put that variance on phi at the alignment
+        target). (Not the monitor's learned noise: fast motion, such as a vibrating
+        hull, inflates that and would pick a slow member; the shape's is what the
+        encoder does not explain.)"""
+        sensor = self.sensor_noise / self.gain.ratio
+        shape = self.gain.channel.shape_variance
+        if not shape:
+            return float(sensor)
+        return float(math.hypot(sensor, math.sqrt(shape / self._phi_variance_per_noise)))
+
+    def sensor_std(self) -> float:
+        """The sensor's own noise [W] on each power (what the fading is learned over)."""
+        return float(self.sensor_noise * self._nominal_std)
 
     def predict(self, u) -> None:
         """Move the estimator to the next step under input ``u`` [rad/s^2]."""
@@ -146,8 +173,19 @@ class LinkSupervisor:
 
     def step(self, t: float, y: np.ndarray, q: float, qdot: float) -> Decision:
         """Step ``t`` [s]: gated powers ``y`` [W], encoder angle ``q`` [rad] and rate
-        ``qdot`` [rad/s]. The estimator has taken the measurement when this returns."""
+        ``qdot`` [rad/s]. The estimator has taken the measurement when this returns.
+
+        While the link is lost, the decision also holds the estimate the run reports
+        instead of the estimator's, which the data no longer back
+        (:class:`~ledsim.loop.held.HeldEstimate`)."""
+        d = self._decide(t, y, q, qdot)
+        self.held.observe(d, q, qdot)
+        return d
+
+    def _decide(self, t: float, y: np.ndarray, q: float, qdot: float) -> Decision:
+        """:meth:`step`'s decision, before the held estimate."""
         est, scan = self.estimator, self.scan
+        self.gain.sample(y, q, self.sensor_std())
         y_model = self.gain.normalize(y)
         xhat = est.update(y_model)
         if self.carry is not None:
@@ -192,7 +230,7 @@ class LinkSupervisor:
             scan.stop()
             self.gain.refit(fit.gain / self.gain.model_gain)
             # phi = phi_home - q while the hull holds still, so phidot = -qdot.
-            est.reset(np.array([fit.phi, -qdot]))
+            self._restart(np.array([fit.phi, -qdot]))
             xhat = est.update(self.gain.normalize(y))
             self._handed_over(q)
             return Decision(xhat, True, reseeded=True, reason="re-seeded")
@@ -206,20 +244,29 @@ class LinkSupervisor:
         bias for seconds); phidot is the encoder's own."""
         return np.diag([(3 * self.fast.fix.stderr)**2, SEED_RATE_STD**2])
 
+    def _restart(self, x0: np.ndarray, covariance: np.ndarray | None = None) -> None:
+        """Restart the estimator from ``x0`` (with ``covariance``), told the noise the
+        powers carry now: while the link was lost it was not told, and a channel that
+        began to fade meanwhile would meet a filter sure of every sample."""
+        self.estimator.reset(x0, covariance)
+        self.estimator.adapt_noise(self.noise_ratio())
+
     def _handed_over(self, q: float) -> None:
         """The estimate is the link's again, at encoder angle ``q`` [rad]."""
         self.monitor.reset()
         self.trusted_q.clear()
         self.trusted_q.append(q)
+        self.held.clear()
 
     def _acquire(self, y, q: float, qdot: float, xhat) -> Decision:
         """A step of the fast acquisition: hold, slew or scan, and the re-seed on arrival."""
         est, scan, fast = self.estimator, self.scan, self.fast
         noise = float(np.mean(self.monitor.noise_std)) * self.gain.ratio
         scan.record(y, q)
-        u, seed = fast.step(y, q, qdot, noise, float(self._angle(xhat)))
+        u, seed = fast.step(y, q, qdot, noise, float(self._angle(xhat)),
+                            self.gain.channel.shape_variance)
         if fast.prime is not None and seed is None:  # at the target: converge from there
-            est.reset(np.array(fast.prime), self._seed_covariance())
+            self._restart(np.array(fast.prime), self._seed_covariance())
             xhat = est.update(self.gain.normalize(y))
         if seed is not None:
             scan.stop()
@@ -228,7 +275,7 @@ class LinkSupervisor:
                 return Decision(xhat, True, reseeded=True, reason="acquired")
             if fast.fix.gain is not None and fast.fix.gain > 0:
                 self.gain.refit(fast.fix.gain / self.gain.model_gain)
-            est.reset(np.array(seed), self._seed_covariance())
+            self._restart(np.array(seed), self._seed_covariance())
             xhat = est.update(self.gain.normalize(y))
             self._handed_over(q)
             return Decision(xhat, True, reseeded=True, reason="acquired")

@@ -47,7 +47,8 @@ METRIC_COLUMNS = ("rmse_x1", "rmse_x2", "rmse_steady_x1", "rmse_steady_x2",
                   "alignment_time", "availability", "mean_power", "recovery_time",
                   "lost_share", "detection_delay", "losses", "snr_db", "ber",
                   "throughput_bps", "fec_share", "geometry_share", "hull_error_rms",
-                  "navigation_error_rms", "received_power_w")
+                  "navigation_error_rms", "received_power_w", "loss_events",
+                  "false_loss_events", "reseeds", "silent_error_share")
 #: Columns that depend on the machine and its load: the only ones that may differ
 #: between backends or reruns.
 TIMING_COLUMNS = ("us_per_step", "realtime_factor")
@@ -162,7 +163,9 @@ def run_cell(job: tuple[RunConfig, Cell]) -> dict:
            "us_per_step": out.us_per_step, "realtime_factor": out.realtime_factor,
            "link": cfg.link, "water": cfg.water, "bit_rate": cfg.data_bit_rate,
            "depth": cfg.depth,
-           "received_power_w": m.mean_power}
+           "received_power_w": m.mean_power, "loss_events": m.loss_events,
+           "false_loss_events": m.false_loss_events, "reseeds": m.reseeds,
+           "silent_error_share": m.silent_error_share}
     return {"version": __version__, "row": to_jsonable(row)}
 
 

@@ -42,6 +42,7 @@ class ParticleFilter(Estimator):
         self.jitter = jitter
         self.lost_chi2 = lost_chi2
         self.inv_R = 1.0 / system.measurement_noise_std**2
+        self.noise_scale = 1.0  # the measurement noise over the model's (adapt_noise)
         self._log_var = None
         d = system.n_state
         self.bandwidth = jitter * (4.0 / (n_particles * (d + 2))) ** (1.0 / (d + 4))
@@ -57,6 +58,13 @@ class ParticleFilter(Estimator):
         self.particles = self.initial_guess(x0) + self.rng.standard_normal(
             (self.n_particles, self.system.n_state)) @ L.T
         self.logw = np.zeros(self.n_particles)
+
+    def covariance(self) -> np.ndarray:
+        """The weighted covariance of the particles."""
+        w = np.exp(self.logw - self.logw.max())
+        w /= w.sum()
+        d = self.particles - w @ self.particles
+        return (w[:, None] * d).T @ d
 
     def update(self, y) -> np.ndarray:
         y = np.asarray(y, dtype=float)
@@ -80,7 +88,16 @@ class ParticleFilter(Estimator):
             self._resample(w)
         return estimate
 
+    def adapt_noise(self, noise_ratio: float, y=None) -> None:
+        """The measurement noise becomes the model's times ``noise_ratio``."""
+        self.noise_scale = float(noise_ratio)
+        return None
+
     def _chi2(self, y, ok) -> np.ndarray:
+        chi2 = self._model_chi2(y, ok)
+        return chi2 if self.noise_scale == 1.0 else chi2 / (self.noise_scale ** 2)
+
+    def _model_chi2(self, y, ok) -> np.ndarray:
         """The normalised squared residual r^2 / var of ``y`` per particle (each
         particle's own R where the noise depends on the output; then
         ``self._log_var`` keeps the log-determinants the likelihood adds)."""

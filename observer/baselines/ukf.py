@@ -58,8 +58,8 @@ class UnscentedKalmanFilter(GaussianFilter):
             y_mean = self.Wm @ Y
             dY = Y - y_mean
             dX = X - self.x
-            S = (self.Wc * dY.T) @ dY + (self.R_at(self.Wm @ Y_all, ok) if self.signal_noise
-                                          else self.R[np.ix_(ok, ok)])
+            S = (self.Wc * dY.T) @ dY + self.R_at(
+                self.Wm @ Y_all if self.signal_noise else None, ok)
             C = (self.Wc * dX.T) @ dY
             if self.diverged(y[ok] - y_mean, S):
                 return self.x.copy()
