@@ -24,6 +24,10 @@ class Estimator(ABC):
     """A recursive state estimator for a :class:`DiscreteSystem`."""
 
     name: str = "estimator"
+    #: Whether its supervisor tells it the channel's factor on the sensor's noise
+    #: (a Bayesian filter, whose model holds the sensor's noise) instead of the noise over
+    #: the model's nominal (:meth:`adapt_noise`).
+    models_its_noise: bool = False
     #: Whether the last estimate, or the state the last input drove the model to
     #: (f(x_hat, u), what the input correction encodes), lies outside the system's
     #: training box: a learned observer's maps then extrapolate. Only the KKL family
@@ -69,8 +73,8 @@ class Estimator(ABC):
         estimator that adapts to it does (a bank picks its member, a gain-scheduled KKL
         sets its floor); ``y`` is the step's measurement (None: before the run, where a
         bank starts on its member at once). Returns the new estimate when adapting
-        changed it, else None. The Bayesian filters scale their measurement noise
-        covariance by its square (:class:`GaussianFilter`, the particle filter)."""
+        changed it, else None. An estimator that :attr:`models_its_noise` is told the
+        channel's factor on the sensor's noise instead (:class:`ToldNoise`)."""
         return None
 
     def covariance(self) -> np.ndarray | None:
@@ -104,7 +108,32 @@ def usable_mask(system: DiscreteSystem, y: np.ndarray) -> np.ndarray:
     return ok
 
 
-class GaussianFilter(Estimator):
+class ToldNoise:
+    """The measurement noise of a Bayesian filter, over its model's. Its model holds
+    the sensor's noise (signal-dependent shot noise included), at the noise scale the
+    run tells it (:meth:`tell_noise_scale`); what its supervisor tells it is only what
+    the channel adds to that (:meth:`adapt_noise`: a fading channel's share)."""
+
+    #: The supervisor tells it the channel's factor on the sensor's noise, not the
+    #: noise over the model's nominal (:meth:`Estimator.adapt_noise`).
+    models_its_noise = True
+    noise_scale: float = 1.0  # the measurement noise over the model's [-]
+    _base_scale: float = 1.0
+
+    def tell_noise_scale(self, scale: float) -> None:
+        """The run's measurement noise is ``scale`` times the model's [-]."""
+        self._base_scale = self.noise_scale = float(scale)
+
+    def adapt_noise(self, noise_ratio: float, y: np.ndarray | None = None) -> None:
+        """The channel's noise is ``noise_ratio`` times the sensor's [-] (1: no fading);
+        the estimate stays."""
+        ratio = float(noise_ratio)
+        if math.isfinite(ratio) and ratio > 0:
+            self.noise_scale = self._base_scale * ratio
+        return None
+
+
+class GaussianFilter(ToldNoise, Estimator):
     """Shared state of the Kalman-type filters: mean ``x``, covariance ``P``, and the
     noise covariances Q, R taken from the system.
 
@@ -124,15 +153,7 @@ class GaussianFilter(Estimator):
         self.signal_noise = noise is not None and noise.signal_dependent
         self.P0 = self.initial_covariance() if P0 is None else np.asarray(P0, dtype=float)
         self.lost_nis, self.lost_steps = lost_nis, lost_steps
-        #: The measurement noise over the model's [-] (:meth:`adapt_noise`): the sensor's
-        #: at the run's noise scale and gain, and what a fading channel adds.
-        self.noise_scale = 1.0
         self.reset()
-
-    def adapt_noise(self, noise_ratio: float, y: np.ndarray | None = None) -> None:
-        """R becomes the model's times ``noise_ratio`` squared; the estimate stays."""
-        self.noise_scale = float(noise_ratio)
-        return None
 
     def R_at(self, y_pred: np.ndarray | None, ok: np.ndarray) -> np.ndarray:
         """R over the usable outputs ``ok`` at the predicted output ``y_pred`` (needed

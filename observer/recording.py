@@ -83,6 +83,10 @@ class RecordingEstimator(Estimator):
     def outside_domain(self) -> bool:
         return self.inner.outside_domain
 
+    @property
+    def models_its_noise(self) -> bool:
+        return self.inner.models_its_noise
+
     def covariance(self):
         return self.inner.covariance()
 

@@ -17,7 +17,7 @@ import argparse
 import dataclasses
 from pathlib import Path
 
-from ledsim.loop import supervisor
+from ledsim.loop import link_gain
 from ledsim.loop.config import RunConfig
 from ledsim.loop.report import run_many
 from ledsim.outputs import atomic_write_text
@@ -53,13 +53,13 @@ def main() -> None:
     args = ap.parse_args()
     run = {"seeds": args.seeds, "seconds": args.seconds}
     rows = []
-    rule = supervisor.tracker_deadband
+    rule = link_gain.tracker_deadband
     for label, band in (("deadband 0.5 % (the bench's)", 0.005),
                         ("deadband 0.05 %", 0.0005), ("deadband 0.005 %", 0.00005),
                         ("deadband by the rule", None)):
-        supervisor.tracker_deadband = rule if band is None else (lambda c, b=band: b)
+        link_gain.tracker_deadband = rule if band is None else (lambda c, b=band: b)
         rows += [_row(label, est, CLEAR, **run) for est in ("kkl", "kkl-bank", "ekf")]
-    supervisor.tracker_deadband = rule
+    link_gain.tracker_deadband = rule
     original = hardware.DETECTORS["si-apd"]
     for label, changes in (("decade gain steps, one conversion a sample",
                             {"step_ratio": 10.0, "conversions": 1}),

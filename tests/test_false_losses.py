@@ -265,3 +265,15 @@ def test_results_json_and_the_sweeps_csv_count_the_losses(tmp_path):
     header = (tmp_path / "s" / "results.csv").read_text().splitlines()[0].split(",")
     for key in ("loss_events", "false_loss_events", "reseeds", "silent_error_share"):
         assert key in header
+
+
+@pytest.mark.parametrize("estimator", ["ekf", "ukf", "pf"])
+def test_a_filter_is_told_the_runs_noise_scale_and_no_more_without_fading(estimator):
+    from ledsim.loop.closed_loop import ClosedLoop
+
+    loop = ClosedLoop(RunConfig(estimator=estimator, noise_scale=3.0, seconds=0.5,
+                                particles=200), [0])
+    est = loop.runs[0].step.estimator
+    assert est.models_its_noise and est.noise_scale == 3.0  # it assumed 1 before
+    loop.run()
+    assert est.noise_scale == 3.0  # no fading: the supervisor's factor stays 1

@@ -212,7 +212,7 @@ def test_the_benchs_observers_refuse_a_physical_link(tmp_path):
 
 
 def test_the_gain_trackers_deadband_follows_the_link():
-    from ledsim.loop.supervisor import BENCH_DEADBAND, tracker_deadband
+    from ledsim.loop.link_gain import BENCH_DEADBAND, tracker_deadband
 
     assert tracker_deadband(LinkConstants()) == BENCH_DEADBAND
     assert tracker_deadband(LinkConstants(distance=0.05)) == BENCH_DEADBAND

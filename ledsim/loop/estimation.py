@@ -204,6 +204,10 @@ def loop_estimator(cfg: RunConfig, system: GimbalSystem, model: IdentifiedGimbal
         # alike: the particle filter's own re-draw fired on half-occluded samples and kicks.
         est = build_estimator(cfg.estimator, system, model=model, particles=cfg.particles,
                               redraw=not cfg.supervision)
+        if cfg.filter_distance != "nominal":  # the nominal model carries it already
+            scale = (run_noise(cfg, system) if noise is None else noise).scale
+            if scale != 1.0:
+                est.tell_noise_scale(scale)
         return est, system
     members = kkl_members(cfg)
     first = members[0].world

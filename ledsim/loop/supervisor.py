@@ -18,22 +18,18 @@ from collections import deque
 import numpy as np
 
 from observer.estimator import Estimator
-from observer.gain_tracking import GainTracker
 from observer.occlusion import EncoderCarry
 from observer.supervision import ResidualMonitor
 
 from ..config import LinkConstants
 from ..control import intensity_maximum
 from ..optics import (
-    layout_power,
-    nominal_noise_std,
     pair_phi_variance,
-    pair_shape_inverse,
-    peak_power,
 )
 from ..step import Decision
 from .acquisition import AcquisitionScan
 from .held import SEED_RATE_STD, HeldEstimate
+from .link_gain import link_gain_tracker
 from .slew import FastAcquisition
 
 #: The scan of a fast acquisition: it only has to bring the beam into view, so it sweeps
@@ -45,15 +41,6 @@ FAST_SCAN = {"speed": 2.0, "widen": 0.4, "dwell": 2.0}
 CENTRE_REACHED = 0.05
 
 
-def model_gain(model, constants: LinkConstants) -> float:
-    """Transmitter gain [W] of a model whose ``h`` is gain x [g(phi), g(phi + dphi)]
-    (least squares over its domain)."""
-    phi = np.linspace(model.domain_low[0], model.domain_high[0], 101)
-    h = np.asarray(model.h(np.stack([phi, np.zeros_like(phi)], axis=-1)))
-    g = layout_power(1.0, phi, constants)
-    return float(np.sum(h * g) / np.sum(g * g))
-
-
 #: Encoder travel [rad] since the last trusted step, while every photodiode is gated
 #: out, that an occlusion cannot explain: the receiver itself turned off the beam (a
 #: kick), so the link is lost now, not when the dropout gate gives up (1 s later).
@@ -61,25 +48,6 @@ BLIND_TRAVEL = 0.2
 
 #: A sample held this long [s] is an occlusion, for the encoder to carry the estimate.
 DEAD_RECKON_AFTER = 0.05
-#: The gain tracker's deadband on the bench, whose pointing samples carry 3.2 % noise
-#: (``observer.gain_tracking.GainTracker``) [-].
-BENCH_DEADBAND = 0.005
-
-
-def tracker_deadband(constants: LinkConstants) -> float:
-    """The gain tracker's deadband for a run of ``constants`` [-]: the bench's, or on a
-    physical link the bench's scaled by the pointing samples' relative noise over the
-    bench's (0.0007-0.02 % at luma's 6-60 m: the gain is that much better
-    determined).
-    ``docs/link_floor.md`` measures the bench's band, a tenth and a hundredth of it."""
-    if constants.link is None:
-        return BENCH_DEADBAND
-    bench = LinkConstants()
-    relative = nominal_noise_std(constants) / peak_power(constants)
-    return BENCH_DEADBAND * min(1.0, relative / (bench.measurement_noise_std
-                                                 / peak_power(bench)))
-
-
 class LinkSupervisor:
     """Gain normalisation, loss detection, acquisition scan and re-seeding for one run.
 
@@ -111,13 +79,7 @@ class LinkSupervisor:
         model = estimator.system
         self.monitor = ResidualMonitor(model, noise_ratio=noise_ratio)
         self.sensor_noise = noise_ratio * gain_ratio  # in the model's nominal noise
-        estimator.adapt_noise(noise_ratio)
-        band = tracker_deadband(constants)
-        self.gain = GainTracker(model, lambda y: pair_shape_inverse(y, constants),
-                                model_gain(model, constants), ratio=gain_ratio,
-                                deadband=band, deadband_moving=band,
-                                phi_variance=lambda phi, y, sigma: pair_phi_variance(
-                                    phi, y, sigma, constants))
+        self.gain = link_gain_tracker(model, constants, gain_ratio)
         self.fast = None
         if fast is not None and reacquire:
             self.fast = FastAcquisition(constants, inertia, fast, intensity_maximum(constants))
@@ -137,6 +99,7 @@ class LinkSupervisor:
         self._phi_variance_per_noise = pair_phi_variance(
             target, model.h(np.array([target, 0.0])), self._nominal_std, constants)
         self.held = HeldEstimate(estimator, self.fast, self._angle, self.trusted_q.maxlen)
+        self._tell_noise()
 
     @property
     def outside_domain(self) -> bool:
@@ -162,6 +125,16 @@ class LinkSupervisor:
         if not shape:
             return float(sensor)
         return float(math.hypot(sensor, math.sqrt(shape / self._phi_variance_per_noise)))
+
+    def _tell_noise(self, y: np.ndarray | None = None):
+        """Tell the estimator the noise the powers carry (``y``: the step's, in the
+        model's gain; None: before the run or at a restart): the noise ratio, or to a
+        filter that models its sensor's noise the fading's factor on it (1 without).
+        Returns the estimate when that changed it, else None."""
+        ratio = self.noise_ratio()
+        if self.estimator.models_its_noise:
+            ratio /= self.sensor_noise / self.gain.ratio
+        return self.estimator.adapt_noise(ratio, y)
 
     def sensor_std(self) -> float:
         """The sensor's own noise [W] on each power (what the fading is learned over)."""
@@ -210,7 +183,7 @@ class LinkSupervisor:
             self.gain.update(y, self.monitor.noise_std * self.gain.ratio)
             # A bank picks the member trained for the noise the rescaled powers now
             # carry, a gain-scheduled KKL its floor by it.
-            adapted = est.adapt_noise(self.noise_ratio(), self.gain.normalize(y))
+            adapted = self._tell_noise(self.gain.normalize(y))
             if adapted is not None:
                 xhat = adapted
             return Decision(xhat, False)
@@ -249,7 +222,7 @@ class LinkSupervisor:
         powers carry now: while the link was lost it was not told, and a channel that
         began to fade meanwhile would meet a filter sure of every sample."""
         self.estimator.reset(x0, covariance)
-        self.estimator.adapt_noise(self.noise_ratio())
+        self._tell_noise()
 
     def _handed_over(self, q: float) -> None:
         """The estimate is the link's again, at encoder angle ``q`` [rad]."""

@@ -5,11 +5,11 @@ from __future__ import annotations
 import numpy as np
 
 from ..errors import ObserverError
-from ..estimator import Estimator, usable_mask
+from ..estimator import Estimator, ToldNoise, usable_mask
 from ..system import DiscreteSystem
 
 
-class ParticleFilter(Estimator):
+class ParticleFilter(ToldNoise, Estimator):
     """Sequential importance resampling with systematic resampling and regularisation.
 
     Args:
@@ -42,7 +42,6 @@ class ParticleFilter(Estimator):
         self.jitter = jitter
         self.lost_chi2 = lost_chi2
         self.inv_R = 1.0 / system.measurement_noise_std**2
-        self.noise_scale = 1.0  # the measurement noise over the model's (adapt_noise)
         self._log_var = None
         d = system.n_state
         self.bandwidth = jitter * (4.0 / (n_particles * (d + 2))) ** (1.0 / (d + 4))
@@ -87,11 +86,6 @@ class ParticleFilter(Estimator):
         if 1.0 / np.sum(w**2) < 0.5 * self.n_particles:
             self._resample(w)
         return estimate
-
-    def adapt_noise(self, noise_ratio: float, y=None) -> None:
-        """The measurement noise becomes the model's times ``noise_ratio``."""
-        self.noise_scale = float(noise_ratio)
-        return None
 
     def _chi2(self, y, ok) -> np.ndarray:
         chi2 = self._model_chi2(y, ok)
