@@ -152,7 +152,11 @@ def read(path: str | Path, arrays: bool = True) -> Stored:
 
 
 def _read_safetensors(path: Path, arrays: bool) -> Stored:
-    from safetensors import safe_open
+    try:
+        from safetensors import safe_open
+    except ImportError:  # a base dependency: only an install that skipped it lacks it
+        raise CheckpointError(f"checkpoint {str(path)!r}: reading it needs the safetensors "
+                              "package (pip install safetensors)") from None
 
     with safe_open(path, framework="np") as f:
         header = f.metadata() or {}
