@@ -56,7 +56,8 @@ def atomic_write_text(path: Path, text: str) -> None:
 
 def save_checkpoint(obs, path: str | Path, extra: dict | None = None) -> Path:
     """:func:`observer.checkpoint.save` through :func:`atomic_write_bytes` (so Ctrl-C
-    leaves no checkpoint behind)."""
+    leaves no checkpoint behind). Returns the checkpoint's path (``.safetensors``, also
+    for a ``.pt`` name)."""
     from observer import checkpoint
 
     return checkpoint.save(obs, path, extra, write_bytes=lambda p, data: atomic_write_bytes(
@@ -92,13 +93,17 @@ def check_out_dir(path: str | Path, flag: str = "--out") -> Path:
     return out
 
 
-def check_out_file(path: str | Path, suffix: str, flag: str = "--out") -> Path:
-    """Refuse an output file that could not be written, before any work is done."""
+def check_out_file(path: str | Path, suffix: str | tuple[str, ...],
+                   flag: str = "--out") -> Path:
+    """Refuse an output file that could not be written, before any work is done.
+    ``suffix``: the file's, or the ones it may have (the first is the usual one)."""
     out = Path(path)
+    suffixes = (suffix,) if isinstance(suffix, str) else suffix
     if out.is_dir():
         raise LedsimError(f"{flag} {str(path)!r} is a folder, not a file")
-    if out.suffix.lower() != suffix:
-        raise LedsimError(f"{flag} {str(path)!r}: the file must end in {suffix}")
+    if out.suffix.lower() not in suffixes:
+        raise LedsimError(f"{flag} {str(path)!r}: the file must end in "
+                          f"{' or '.join(suffixes)}")
     parent = out.parent
     if not _can_create_in(parent):
         raise LedsimError(f"{flag} {str(path)!r}: folder {str(parent)!r} does not exist or is not "

@@ -25,7 +25,7 @@ def checkpoint_dir() -> Path:
 
 def shipped_checkpoint(distance: float, world: str = "closed-form",
                        design: str = "default", noise: float = 1.0) -> Path:
-    """Path of the shipped observer for a link distance [m].
+    """Path of the shipped observer (a ``.safetensors`` checkpoint) for a link distance [m].
 
     Args:
         distance: link distance d [m].
@@ -46,7 +46,7 @@ def shipped_checkpoint(distance: float, world: str = "closed-form",
                          "lens": "kkl_mujoco_lens"}
               }[world][design]
     suffix = "" if noise == 1.0 else f"_noise{noise:g}"
-    return checkpoint_dir() / f"{prefix}_d{distance:g}{suffix}.pt"
+    return checkpoint_dir() / f"{prefix}_d{distance:g}{suffix}.safetensors"
 
 
 def require_shipped_checkpoint(distance: float, world: str = "closed-form",

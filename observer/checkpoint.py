@@ -1,59 +1,55 @@
 """Saving and loading trained KKL observers: weights plus JSON metadata.
 
-A checkpoint is one ``.pt`` file holding only tensors and a JSON string (so it loads
-with ``torch.load(..., weights_only=True)``; nothing is unpickled) and a readable
-``.json`` copy of the metadata beside it. Both are written atomically. Loading checks
-the metadata (Te, A, B, model constants) against the system it is loaded for.
-
-Loading does not import torch: :mod:`observer.tensorfile` reads the file's tensors
-without executing anything in it, and only a file it does not recognise goes to
-``torch.load(..., weights_only=True)``.
+A checkpoint is one ``.safetensors`` file holding the observer's arrays and, in its
+header, the format's name and the metadata (:mod:`observer.checkpoint_io`), with a
+readable ``.json`` copy of the metadata beside it; both are written atomically. Loading
+needs no torch and executes nothing in the file, and checks the metadata (Te, A, B,
+model constants) against the system it is loaded for. A ``.pt`` checkpoint of ledsim 0.2
+still loads where torch is installed; a ``.pt`` name stands for its ``.safetensors``
+sibling where there is one (the shipped checkpoints were ``.pt`` files).
 """
 
 from __future__ import annotations
 
-import io
 import json
 import math
-import os
 from collections.abc import Callable
 from pathlib import Path
 
 import numpy as np
 
-from . import scheduled_checkpoint, tensorfile
-from .errors import ObserverError
+from . import scheduled_checkpoint
+from .checkpoint_io import (  # noqa: F401 (re-exported)
+    FORMAT,
+    SUFFIX,
+    CheckpointError,
+    Stored,
+    convert,
+    corrupt,
+    read,
+    replace_file,
+    resolve,
+    target,
+    write,
+)
 from .kkl import KKLObserver
 from .nets import NumpyMLP
 from .scheduled import ScheduledKKL
 from .system import DiscreteSystem
 
-FORMAT = "ledsim-kkl/1"
-
-
-class CheckpointError(ObserverError):
-    """A checkpoint is missing, corrupt, or was trained for another system."""
-
-
-def _replace(path: Path, data: bytes) -> None:
-    """Write ``data`` beside ``path`` and rename it over ``path`` (never half a file)."""
-    path.parent.mkdir(parents=True, exist_ok=True)
-    tmp = path.with_name(f".{path.name}.{os.getpid()}.tmp")
-    try:
-        tmp.write_bytes(data)
-        os.replace(tmp, path)
-    finally:
-        tmp.unlink(missing_ok=True)
+#: Checkpoint files whose contents a process keeps (:func:`_read_shared`).
+MAX_CACHED = 16
 
 
 def save(obs: KKLObserver, path: str | Path, extra: dict | None = None,
          write_bytes: Callable[[Path, bytes], None] | None = None) -> Path:
-    """Write ``obs`` to ``path`` (``.pt``) and its metadata to ``path.with_suffix('.json')``.
+    """Write ``obs`` to ``path`` (``.safetensors``; for a ``.pt`` name, its
+    ``.safetensors`` sibling) and its metadata to ``.json`` beside it. Returns the
+    checkpoint's path.
 
     ``write_bytes(path, data)`` writes each file (default: beside it, then renamed over
     it); an application passes its own (``ledsim.outputs.save_checkpoint``)."""
-    path = Path(path)
-    write_bytes = write_bytes or _replace
+    path = target(path)
     if isinstance(obs, ScheduledKKL):
         meta, named = scheduled_checkpoint.metadata(obs), scheduled_checkpoint.arrays(obs)
     else:
@@ -64,29 +60,23 @@ def save(obs: KKLObserver, path: str | Path, extra: dict | None = None,
                                                       ("decoder_T_star", obs.decoder_T_star))
                  for k, a in net.arrays().items()}
     meta = strict_json({**meta, **getattr(obs, "training_metadata", {}), **(extra or {})})
-    import torch
-
-    tensors = {k: torch.from_numpy(np.ascontiguousarray(a)) for k, a in named.items()}
-    payload = {"format": meta["format"], "metadata_json": json.dumps(meta, allow_nan=False),
-               **tensors}
-    buf = io.BytesIO()
-    torch.save(payload, buf)
-    write_bytes(path, buf.getvalue())
-    write_bytes(path.with_suffix(".json"),
-                (json.dumps(meta, indent=2, allow_nan=False) + "\n").encode())
+    write(Stored(meta["format"], json.dumps(meta, allow_nan=False), named), path,
+           write_bytes or replace_file)
     return path
 
 
 def metadata(path: str | Path) -> dict:
     """The metadata a checkpoint was saved with (its system, design, training)."""
-    path = Path(path)
-    if not path.is_file():
-        raise CheckpointError(f"checkpoint {str(path)!r} does not exist")
+    path = _existing(path)
     try:
-        return json.loads(_read(path)["metadata_json"])
+        meta = json.loads(read(path, arrays=False).metadata_json)
+        if not isinstance(meta, dict):
+            raise TypeError("the metadata is not a JSON object")
+        return meta
+    except CheckpointError:
+        raise
     except Exception as exc:
-        raise CheckpointError(f"checkpoint {str(path)!r} is corrupt or not a ledsim "
-                              f"checkpoint ({type(exc).__name__})") from None
+        raise corrupt(path, exc) from None
 
 
 def load(path: str | Path, system: DiscreteSystem, check: bool = True, *,
@@ -94,40 +84,46 @@ def load(path: str | Path, system: DiscreteSystem, check: bool = True, *,
          name: str | None = None) -> KKLObserver | ScheduledKKL:
     """Load a checkpoint for ``system``; raise :class:`CheckpointError` if it does not fit.
     A gain-scheduled KKL's checkpoint (``ledsim train --design scheduled``) gives a
-    :class:`~observer.scheduled.ScheduledKKL`.
+    :class:`~observer.scheduled.ScheduledKKL`. ``path``: see :func:`resolve`.
 
     ``model``: what the observer computes with (Omega's f, the h of missing samples;
     default ``system``); ``use_omega``: apply the Omega correction; ``name``: the
     estimator's name in tables (default ``kkl``)."""
-    path = Path(path)
-    if not path.is_file():
-        raise CheckpointError(f"checkpoint {str(path)!r} does not exist")
+    path = _existing(path)
     try:
-        payload = _read_shared(path)
-        meta = json.loads(payload["metadata_json"])
-        if payload.get("format") == scheduled_checkpoint.FORMAT:
+        stored = _read_shared(path)
+        meta = json.loads(stored.metadata_json)
+        if stored.format == scheduled_checkpoint.FORMAT:
             _check_system(path, meta["system"], system, check)
-            obs = scheduled_checkpoint.build(payload, meta, system if model is None
+            obs = scheduled_checkpoint.build(stored.arrays, meta, system if model is None
                                              else model, use_omega)
             return _named(obs, meta, name)
-        enc, dec = (_net(payload, prefix) for prefix in ("encoder_T", "decoder_T_star"))
+        enc, dec = (_net(stored.arrays, prefix) for prefix in ("encoder_T", "decoder_T_star"))
         lam = np.asarray(meta["eigenvalues"], dtype=float)
         B = np.asarray(meta["B_scaled"], dtype=float)
         u_bar = float(meta.get("u_bar", 0.0))
         saved_system = meta["system"]
     except CheckpointError:  # it loads, but was trained for another system
         raise
-    except Exception as exc:  # corrupt file, wrong keys, not a torch file
-        raise CheckpointError(f"checkpoint {str(path)!r} is corrupt or not a ledsim "
-                              f"checkpoint ({type(exc).__name__})") from None
-    if payload.get("format") != FORMAT:
+    except Exception as exc:  # corrupt file, wrong keys, wrong types
+        raise corrupt(path, exc) from None
+    if stored.format != FORMAT:
         raise CheckpointError(f"checkpoint {str(path)!r} has format "
-                              f"{payload.get('format')!r}, expected {FORMAT!r}")
+                              f"{stored.format!r}, expected {FORMAT!r}")
     _check_contents(path, enc, dec, lam, B, u_bar, system)
     _check_system(path, saved_system, system, check)
     obs = KKLObserver(system if model is None else model, lam, B, enc, dec, u_bar=u_bar,
                       use_omega=use_omega)
     return _named(obs, meta, name)
+
+
+def _existing(path: str | Path) -> Path:
+    """The file ``path`` stands for (:func:`resolve`), or a one-line refusal."""
+    file = resolve(path)
+    if not file.is_file():
+        what = "is not a file" if file.exists() else "does not exist"
+        raise CheckpointError(f"checkpoint {str(path)!r} {what}")
+    return file
 
 
 def _check_system(path: Path, saved_system: dict, system: DiscreteSystem, check: bool) -> None:
@@ -146,56 +142,33 @@ def _named(obs, meta: dict, name: str | None):
     return obs
 
 
-_PAYLOADS: dict = {}
+_STORED: dict = {}
 
 
-def _read_shared(path: Path) -> dict:
-    """:func:`_read`, kept per process while the file is unchanged, its arrays made
+def _read_shared(path: Path) -> Stored:
+    """:func:`read`, kept per process while the file is unchanged, its arrays made
     read-only (copy one to change it): the runs of many seeds share one copy of the
     weights (64 seeds held 64 copies of a few MB each, and stepped through them out of
-    cache)."""
+    cache). A process that loads many checkpoints keeps the last few."""
     st = path.stat()
     key = (str(path.resolve()), st.st_ino, st.st_size, st.st_mtime_ns)
-    payload = _PAYLOADS.get(key)
-    if payload is None:
-        payload = _read(path)
-        for v in payload.values():
-            if isinstance(v, np.ndarray):
-                v.flags.writeable = False
-        if len(_PAYLOADS) >= 16:  # a process that loads many checkpoints keeps a few
-            _PAYLOADS.clear()
-        _PAYLOADS[key] = payload
-    return payload
+    stored = _STORED.get(key)
+    if stored is None:
+        stored = read(path)
+        for a in stored.arrays.values():
+            a.flags.writeable = False
+        if len(_STORED) >= MAX_CACHED:
+            _STORED.clear()
+        _STORED[key] = stored
+    return stored
 
 
-def _read(path: Path) -> dict:
-    """The saved dict, tensors as numpy arrays: by :mod:`observer.tensorfile` (no torch),
-    or for a file it does not recognise by ``torch.load(..., weights_only=True)``."""
-    try:
-        return tensorfile.read(path)
-    except tensorfile.Unsupported:
-        pass
-    import warnings
-
-    import torch
-
-    # torch warns about foreign pickle protocols before it refuses a file; the refusal is
-    # reported as one line by the caller, so the warning is not shown.
-    with warnings.catch_warnings():
-        warnings.simplefilter("ignore")
-        payload = torch.load(path, map_location="cpu", weights_only=True)
-    if not isinstance(payload, dict):
-        raise TypeError("not a dict")
-    return {k: v.numpy(force=True) if isinstance(v, torch.Tensor) else v
-            for k, v in payload.items()}
-
-
-def _net(payload: dict, prefix: str) -> NumpyMLP:
-    """A network from its named tensors (``Wm<i>``, ``bm<i>``: layers past the first)."""
+def _net(arrays: dict, prefix: str) -> NumpyMLP:
+    """A network from its named arrays (``Wm<i>``, ``bm<i>``: layers past the first)."""
     def arr(k):
-        return np.asarray(payload[f"{prefix}.{k}"], dtype=np.float64)
+        return np.asarray(arrays[f"{prefix}.{k}"], dtype=np.float64)
 
-    n_mid = sum(1 for k in payload if k.startswith(f"{prefix}.Wm"))
+    n_mid = sum(1 for k in arrays if k.startswith(f"{prefix}.Wm"))
     if n_mid > 16:
         raise ValueError("too many layers")
     return NumpyMLP(*(arr(k) for k in ("W1", "b1", "W2", "b2")),

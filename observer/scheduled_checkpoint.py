@@ -2,8 +2,8 @@
 and schedule in the metadata (format ``ledsim-kkl-scheduled/1``).
 
 :func:`observer.checkpoint.save` and :func:`observer.checkpoint.load` dispatch here, so a
-scheduled checkpoint is read with ``torch.load(..., weights_only=True)`` semantics and
-checked against the run like every other (Te and the model constants in its metadata).
+scheduled checkpoint is a ``.safetensors`` file like every other, and is checked against
+the run like every other (Te and the model constants in its metadata).
 """
 
 from __future__ import annotations
@@ -35,17 +35,17 @@ def arrays(obs: ScheduledKKL) -> dict[str, np.ndarray]:
     return out
 
 
-def build(payload: dict, meta: dict, model, use_omega: bool) -> ScheduledKKL:
-    """The observer from a checkpoint's tensors and metadata (raises on anything
+def build(arrays: dict[str, np.ndarray], meta: dict, model, use_omega: bool) -> ScheduledKKL:
+    """The observer from a checkpoint's named arrays and metadata (raises on anything
     malformed; the caller turns that into one line)."""
     design = ScheduledDesign.from_dict(meta["scheduled_design"])
     schedule = GainSchedule(**meta["schedule"])
     maps = {}
     for name in _MAPS:
-        if f"{name}.W1" not in payload:
+        if f"{name}.W1" not in arrays:
             maps[name] = None
             continue
-        net = GainTableMap(*(np.asarray(payload[f"{name}.{k}"], dtype=np.float64)
+        net = GainTableMap(*(np.asarray(arrays[f"{name}.{k}"], dtype=np.float64)
                              for k in _ARRAYS))
         if not net.consistent() or not all(np.isfinite(a).all()
                                            for a in net.arrays().values()):

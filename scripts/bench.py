@@ -395,7 +395,7 @@ def main() -> None:
     lines += ["", "The rest is Python's start, importing numpy and MuJoCo, building the "
               "scene, fitting the identified model (4000 transitions, batched) and, with "
               "plots, importing matplotlib and drawing. The shipped observers load "
-              "without torch (`observer/tensorfile.py`). A fresh Python that only imports "
+              "without torch (`.safetensors` files). A fresh Python that only imports "
               f"numpy and MuJoCo takes {floor_import:.2f} s: longer than the 10 s run "
               "simulates, so only longer runs can spend most of their time simulating."]
     ox = onnx_step_speed()

@@ -80,7 +80,7 @@ def ablation_checkpoints(folder: Path) -> list[tuple[str, str]]:
         obs.schedule = schedule
         if not locked:
             obs.decoder_locked = None
-        out.append((label, str(ckpt.save(obs, folder / f"v{i}.pt"))))
+        out.append((label, str(ckpt.save(obs, folder / f"v{i}.safetensors"))))
     return out
 
 

@@ -1,19 +1,19 @@
 """Train the shipped KKL observers of the MuJoCo world (``ledsim train --world mujoco``)
-into assets/checkpoints/kkl_mujoco_d<d>.pt.
+into assets/checkpoints/kkl_mujoco_d<d>.safetensors.
 
     python scripts/train_mujoco.py [--distances 0.085] [--noise-scales 1] [--samples 200000]
 
-``--lens --bank`` trains their bank (kkl_mujoco_lens_d0.085_noise<s>.pt).
+``--lens --bank`` trains their bank (kkl_mujoco_lens_d0.085_noise<s>.safetensors).
 
 ``--lens`` trains the gain-scheduled KKL of the physical presets (``--link aquaoptical``
 and the others): the bench with their receiver's response and relative noise
 (``ledsim.radiometry.presets.kkl_reference_constants``), saved as
-kkl_mujoco_scheduled_lens_d0.085.pt.
+kkl_mujoco_scheduled_lens_d0.085.safetensors.
 
 ``--bank`` trains the bank the closed loop runs at every distance
 (``ledsim.loop.estimation.BANK``): the observers of d = 0.085 m for 1x, 3x, 6x and 13x
 the nominal measurement noise (what the noise becomes, rescaled to the reference gain,
-at about d = 0.085-0.3 m), saved as kkl_mujoco_d0.085_noise<s>.pt (no suffix for 1).
+at about d = 0.085-0.3 m), saved as kkl_mujoco_d0.085_noise<s>.safetensors (no suffix for 1).
 """
 
 from __future__ import annotations

@@ -56,7 +56,7 @@ def main() -> None:
     data = generate_transitions(system, cfg.n_samples, cfg.u_bar,
                                 np.random.default_rng(cfg.seed))
     obs, rep = train_kkl(system, design, cfg, data=data, progress=False)
-    path = save_checkpoint(obs, f"out/wide_box/kkl_{args.phi:g}_{args.rate:g}.pt")
+    path = save_checkpoint(obs, f"out/wide_box/kkl_{args.phi:g}_{args.rate:g}.safetensors")
     print(f"box |phi| <= {args.phi:g}, |phidot| <= {args.rate:g}: trained in "
           f"{rep.seconds:.0f} s, L_recon {rep.loss_recon:.2e}")
     for name, dist in CASES.items():

@@ -12,8 +12,8 @@ from observer.metrics import rmse
 
 
 def test_round_trip_gives_the_same_observer(tiny_observer, system, tmp_path, rng):
-    path = checkpoint.save(tiny_observer, tmp_path / "obs.pt")
-    assert path.with_suffix(".json").is_file()
+    path = checkpoint.save(tiny_observer, tmp_path / "obs.safetensors")
+    assert path == tmp_path / "obs.safetensors" and path.with_suffix(".json").is_file()
     loaded = checkpoint.load(path, system)
     x = system.sample_domain(rng, 10)
     np.testing.assert_allclose(loaded.encode(x), tiny_observer.encode(x))
@@ -41,6 +41,8 @@ def test_corrupt_and_missing_checkpoints_are_refused(tmp_path, system):
         checkpoint.load(bad, system)
     with pytest.raises(checkpoint.CheckpointError, match="does not exist"):
         checkpoint.load(tmp_path / "missing.pt", system)
+    with pytest.raises(checkpoint.CheckpointError, match="is not a file"):
+        checkpoint.load(tmp_path, system)
 
 
 @pytest.mark.parametrize("d,bound", [(0.085, (5.2e-3, 19.2e-3)), (0.1, (5.2e-3, 19.2e-3)),
@@ -57,17 +59,22 @@ def test_shipped_checkpoints_load_and_track(d, bound):
 
 
 def _poisoned(src, dst, mutate):
-    import torch
+    """``src``'s contents, changed by ``mutate`` (a dict of its header strings and
+    arrays), written as a checkpoint at ``dst``."""
+    from safetensors.numpy import save_file
 
-    payload = torch.load(src, weights_only=True)
+    stored = checkpoint.read(src)
+    payload = {"format": stored.format, "metadata_json": stored.metadata_json,
+               **{k: a.copy() for k, a in stored.arrays.items()}}
     mutate(payload)
-    torch.save(payload, dst)
+    save_file({k: v for k, v in payload.items() if isinstance(v, np.ndarray)}, dst,
+              metadata={k: payload[k] for k in ("format", "metadata_json")})
     return dst
 
 
 @pytest.mark.parametrize("mutate,needle", [
-    (lambda p: p["decoder_T_star.W2"].fill_(float("nan")), "NaN or infinite"),
-    (lambda p: p["encoder_T.b1"].fill_(float("inf")), "NaN or infinite"),
+    (lambda p: p["decoder_T_star.W2"].fill(float("nan")), "NaN or infinite"),
+    (lambda p: p["encoder_T.b1"].fill(float("inf")), "NaN or infinite"),
     (lambda p: p.update(metadata_json=p["metadata_json"].replace(
         '"eigenvalues": [', '"eigenvalues": [5.0, ')), "shapes"),
     (lambda p: p.update({"encoder_T.b1": p["encoder_T.b1"][:-1]}), "shapes"),
@@ -75,8 +82,8 @@ def _poisoned(src, dst, mutate):
 ])
 def test_checkpoints_that_load_but_are_poison_are_refused(tmp_path, tiny_observer, system,
                                                           mutate, needle):
-    good = checkpoint.save(tiny_observer, tmp_path / "good.pt")
-    bad = _poisoned(good, tmp_path / "bad.pt", mutate)
+    good = checkpoint.save(tiny_observer, tmp_path / "good.safetensors")
+    bad = _poisoned(good, tmp_path / "bad.safetensors", mutate)
     with pytest.raises(checkpoint.CheckpointError, match=needle):
         checkpoint.load(bad, system)
 
@@ -89,8 +96,8 @@ def test_unstable_eigenvalues_are_refused(tmp_path, tiny_observer, system):
         meta["eigenvalues"] = [5.0] + meta["eigenvalues"][1:]
         p["metadata_json"] = json.dumps(meta)
 
-    bad = _poisoned(checkpoint.save(tiny_observer, tmp_path / "g.pt"), tmp_path / "b.pt",
-                    unstable)
+    bad = _poisoned(checkpoint.save(tiny_observer, tmp_path / "g.safetensors"),
+                    tmp_path / "b.safetensors", unstable)
     with pytest.raises(checkpoint.CheckpointError, match="outside"):
         checkpoint.load(bad, system)
 

@@ -18,7 +18,7 @@ COMMANDS = {
     "demo": ["demo", "--seeds", "4", "--out", "{out}"],
     "render": ["render", "--seconds", "30", "--width", "160", "--height", "120",
                "--out", "{out}.mp4"],
-    "train": ["train", "--samples", "400000", "--out", "{out}.pt"],
+    "train": ["train", "--samples", "400000", "--out", "{out}.safetensors"],
 }
 
 

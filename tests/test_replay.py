@@ -17,8 +17,8 @@ from ledsim.resources import require_shipped_checkpoint
 OCCLUSION = ("occlusion:start=2,duration=1",)
 
 
-def _save(tmp_path, name="t", **kw):
-    cfg = RunConfig(seconds=4.0, disturbances=OCCLUSION, particles=300, **kw)
+def _save(tmp_path, name="t", seconds_=4.0, **kw):
+    cfg = RunConfig(seconds=seconds_, disturbances=OCCLUSION, particles=300, **kw)
     series = run_once(cfg, 1, keep_trace=True).trace.series()
     path = tmp_path / f"{name}.npz"
     np.savez_compressed(path, **series)
@@ -95,3 +95,168 @@ def test_run_save_trace_keeps_the_record_and_replay_reads_it(tmp_path):
     r = run_cli("replay", str(trace))
     assert r.returncode == 0, r.stderr
     assert "largest difference 0" in r.stdout
+
+
+@pytest.fixture(scope="module")
+def saved(tmp_path_factory):
+    """A short trace of the EKF: its path and its arrays."""
+    cfg = RunConfig(estimator="ekf", seconds=1.0, particles=300)
+    series = run_once(cfg, 1, keep_trace=True).trace.series()
+    path = tmp_path_factory.mktemp("trace") / "ekf.npz"
+    np.savez_compressed(path, **series)
+    return path, series
+
+
+class _Payload:
+    """What an unpickled object array would run: touch a marker."""
+
+    def __init__(self, marker):
+        self.marker = str(marker)
+
+    def __reduce__(self):
+        return (open, (self.marker, "w"))
+
+
+def _hostile(path, series, case, tmp_path):
+    """Write the damaged or foreign file of ``case`` at ``path``; returns a needle of its
+    error."""
+    data = path.read_bytes()
+    cfg = json.loads(str(series["config"]))
+
+    def variant(needle, **changes):
+        np.savez(out, **{k: v for k, v in {**series, **changes}.items() if v is not None})
+        return needle
+
+    out = tmp_path / f"{case}.npz"
+    if case == "truncated":
+        out.write_bytes(data[:len(data) // 2])
+        return "damaged"
+    if case == "bad crc":  # a byte of the record's data flipped (stored, not deflated)
+        np.savez(out, **series)
+        raw = bytearray(out.read_bytes())
+        raw[raw.index(b"call_args.npy") + 400] ^= 0xFF
+        out.write_bytes(bytes(raw))
+        return "CRC-32"
+    if case == "empty":
+        out.write_bytes(b"")
+        return "is empty"
+    if case == "json":
+        out.write_text(json.dumps(cfg))
+        return "not a .npz trace"
+    if case == "random":
+        out.write_bytes(np.random.default_rng(0).bytes(4096))
+        return "not a .npz trace"
+    if case == "npy":
+        np.save(out, series["phi"])
+        out.write_bytes(out.with_suffix(".npz.npy").read_bytes())
+        return "one .npy array"
+    if case == "directory":
+        out.mkdir()
+        return "is not a file"
+    if case == "missing":
+        return "does not exist"
+    if case == "no record":
+        return variant("--save-trace", call_kind=None, call_args=None)
+    if case == "config not json":
+        return variant("is not JSON", config=np.array("{estimator: ekf"))
+    if case == "config a list":
+        return variant("JSON object", config=np.array("[1, 2]"))
+    if case == "config unknown key":
+        return variant("unknown key 'warp'", config=np.array(json.dumps({**cfg, "warp": 9})))
+    if case == "config wrong type":
+        return variant("distance 'far' is not allowed",
+                       config=np.array(json.dumps({**cfg, "distance": "far"})))
+    if case == "config bad value":
+        return variant("--distance -1 is not allowed",
+                       config=np.array(json.dumps({**cfg, "distance": -1})))
+    if case == "config unknown estimator":
+        return variant("unknown estimator 'crystal-ball'",
+                       config=np.array(json.dumps({**cfg, "estimator": "crystal-ball"})))
+    if case == "config missing checkpoint":
+        return variant("checkpoint", config=np.array(json.dumps(
+            {**cfg, "estimator": "kkl", "checkpoint": str(tmp_path / "gone.pt")})))
+    if case == "object array":
+        return variant("Python objects", call_args=np.array(
+            [_Payload(tmp_path / "pwned")] * 3, dtype=object))
+    if case == "object config":
+        return variant("Python objects", config=np.array({"a": 1}, dtype=object))
+    if case == "args of one dimension":
+        return variant("not floats in 2 dimensions", call_args=series["call_args"].ravel())
+    if case == "kinds of floats":
+        return variant("not integers", call_kind=series["call_kind"].astype(float))
+    if case == "config a number":
+        return variant("not a string", config=np.array(3.0))
+    if case == "rows differ":
+        return variant("different numbers of calls", call_step=series["call_step"][:-1])
+    kind, nargs = series["call_kind"].copy(), series["call_nargs"].copy()
+    if case == "unknown call":
+        kind[3] = 17
+        return variant("not one of", call_kind=kind)
+    if case == "too many arguments":
+        nargs[3] = 99
+        return variant("more arguments than", call_nargs=nargs)
+    if case == "an update of one number":
+        nargs[np.flatnonzero(kind == 2)[0]] = 1
+        return variant("(update) has 1 arguments", call_nargs=nargs)
+    if case == "estimates of three states":
+        return variant("call_out has 3 columns", call_out=np.zeros((len(kind), 3)))
+    if case == "a NaN input":
+        args = series["call_args"].copy()
+        args[np.flatnonzero(kind == 3)[0], 0] = np.nan
+        return variant("NaN or infinite", call_args=args)
+    raise AssertionError(case)
+
+
+HOSTILE = ["truncated", "bad crc", "empty", "json", "random", "npy", "directory", "missing",
+           "no record", "config not json", "config a list", "config unknown key",
+           "config wrong type", "config bad value", "config unknown estimator",
+           "config missing checkpoint", "object array", "object config",
+           "args of one dimension", "kinds of floats", "config a number", "rows differ",
+           "unknown call", "too many arguments", "an update of one number",
+           "estimates of three states", "a NaN input"]
+
+
+@pytest.mark.parametrize("case", HOSTILE)
+def test_a_damaged_or_foreign_trace_is_one_line_and_exit_2(saved, case, tmp_path, capsys):
+    from ledsim.cli import main
+
+    needle = _hostile(*saved, case, tmp_path)
+    out = tmp_path / f"{case}.npz"
+    assert main(["replay", str(out)]) == 2
+    err = capsys.readouterr().err
+    assert err.startswith(f"ledsim: error: trace {str(out)!r}") and needle in err, err
+    assert len(err.strip().splitlines()) == 1 and "allow_pickle" not in err, err
+    assert not (tmp_path / "pwned").exists()
+
+
+def test_a_damaged_trace_from_the_command_line(saved, tmp_path):
+    """No traceback and no advice to load unsafely, in a fresh process."""
+    for case in ("truncated", "object array", "json"):
+        needle = _hostile(*saved, case, tmp_path)
+        r = run_cli("replay", str(tmp_path / f"{case}.npz"))
+        assert_user_error(r, needle)
+        assert "allow_pickle" not in r.stderr
+
+
+def test_a_trace_of_a_pt_checkpoint_name_replays(tmp_path):
+    """Traces saved before the checkpoints were converted name the .pt files."""
+    ckpt = require_shipped_checkpoint(0.085, "mujoco")
+    path, _ = _save(tmp_path, estimator="kkl", checkpoint=str(ckpt.with_suffix(".pt")),
+                    seconds_=3.0)
+    assert replay(path).max_abs_difference == 0.0
+
+
+def test_a_saved_run_configuration_reads_back_and_is_checked():
+    from dataclasses import asdict
+
+    from ledsim.errors import LedsimError
+
+    cfg = RunConfig(disturbances=OCCLUSION, imu_noise=("dvl_noise=0.02",), seconds=3.0,
+                    initial_angle=0.1, water="coastal", link="aquaoptical")
+    assert RunConfig.from_dict(json.loads(json.dumps(asdict(cfg)))) == cfg
+    assert RunConfig.from_dict({"estimator": "ekf"}) == RunConfig(estimator="ekf")  # older
+    for saved, needle in (({"seeds": 2.0}, "an integer"), ({"imu": "yes"}, "true or false"),
+                          ({"seconds": True}, "a number or null"), ({"x": 1}, "'x'"),
+                          ({"scenario": "dance"}, "dance")):
+        with pytest.raises(LedsimError, match=needle):
+            RunConfig.from_dict(saved)

@@ -119,13 +119,13 @@ def test_round_trip_and_refusals(scheduled, system, tmp_path):
     bad["decoder_T_star.coef"][0, 0, 0, 0] = np.nan
     import json
 
-    import torch
+    from safetensors.numpy import save_file
 
-    torch.save({"format": sc.FORMAT, "metadata_json": json.dumps(sc.metadata(obs)),
-                **{k: torch.from_numpy(np.ascontiguousarray(v)) for k, v in bad.items()}},
-               tmp_path / "nan.pt")
+    save_file({k: np.ascontiguousarray(v) for k, v in bad.items()},
+              tmp_path / "nan.safetensors",
+              metadata={"format": sc.FORMAT, "metadata_json": json.dumps(sc.metadata(obs))})
     with pytest.raises(ckpt.CheckpointError, match="corrupt"):
-        ckpt.load(tmp_path / "nan.pt", system)
+        ckpt.load(tmp_path / "nan.safetensors", system)
 
 
 def test_table_maps_interpolate_between_grid_gains():

@@ -212,7 +212,12 @@ def evaluate(args) -> int:
 
 
 def train(args) -> int:
-    check_out_file(args.out, ".pt")
+    # A .pt name (ledsim 0.2 wrote torch files) writes its .safetensors sibling, which
+    # the same name then loads (observer.checkpoint.resolve).
+    out = check_out_file(args.out, (".safetensors", ".pt"))
+    if out.with_suffix(".safetensors").is_dir():
+        raise LedsimError(f"--out {str(args.out)!r}: {str(out.with_suffix('.safetensors'))!r} "
+                          "is a folder")
     if args.world == "mujoco":
         from ..loop.training import train_mujoco_observer
 

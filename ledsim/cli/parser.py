@@ -109,7 +109,8 @@ def build_parser() -> argparse.ArgumentParser:
     tr.add_argument("--samples", type=number(1000, 1_000_000, integer=True), default=200_000,
                     help="training transitions")
     tr.add_argument("--seed", type=SEED, default=0, help="seed of data and features")
-    tr.add_argument("--out", required=True, help="checkpoint path (.pt)")
+    tr.add_argument("--out", required=True, help="checkpoint path (.safetensors; a .pt "
+                    "name writes its .safetensors sibling)")
 
     ex = command("export", "one step of a KKL observer as an ONNX graph (for the vehicle)")
     ex.add_argument("--checkpoint", help="KKL checkpoint (default: the shipped MuJoCo "

@@ -22,7 +22,12 @@ from .registry import (  # noqa: F401 (re-exported)
     PHYSICS_SCENARIOS,
     peak_snr,
 )
-from .validation import keeping_gains, navigation_noise, validate_run  # noqa: F401
+from .validation import (  # noqa: F401
+    keeping_gains,
+    navigation_noise,
+    run_from_dict,
+    validate_run,
+)
 
 
 @dataclass(frozen=True)
@@ -230,6 +235,12 @@ class RunConfig:
         """The run made of these parts."""
         return cls(**asdict(world), **asdict(task), **asdict(estimation),
                    **asdict(execution))
+
+    @classmethod
+    def from_dict(cls, saved: dict) -> RunConfig:
+        """The run a saved configuration (``asdict`` of one, through JSON) describes,
+        checked in one line (:func:`~ledsim.loop.validation.run_from_dict`)."""
+        return run_from_dict(cls, saved)
 
     world = _PartView(WorldPart)
     task = _PartView(TaskPart)

@@ -4,6 +4,8 @@ physical range, refused in one line naming the value and what is allowed."""
 from __future__ import annotations
 
 import math
+import types
+import typing
 
 from ..config import PAPER_DISTANCE, LinkConstants, NavigationNoise
 from ..errors import LedsimError
@@ -115,3 +117,52 @@ def validate_run(cfg) -> None:
     check_timing(disturbances, cfg.run_seconds)
     navigation_noise(cfg.imu_noise)
     keeping_gains(cfg.station_keeping_gains)
+
+
+def run_from_dict(cls, saved: dict):
+    """The run of class ``cls`` (:class:`~ledsim.loop.config.RunConfig`) that a saved
+    configuration describes (``asdict`` of one, through JSON, so its tuples are lists; a
+    key it lacks keeps its default), checked: a key that is not a field, a value of
+    another type, or a run :func:`validate_run` refuses raises :class:`LedsimError`
+    naming it."""
+    if not isinstance(saved, dict):
+        raise LedsimError(f"a run configuration is a JSON object, not {type(saved).__name__}")
+    hints = typing.get_type_hints(cls)
+    unknown = [k for k in saved if k not in hints]
+    if unknown:
+        raise LedsimError(f"unknown key {', '.join(map(repr, unknown))} in a run "
+                          "configuration (one of another ledsim version?)")
+    for key, value in saved.items():
+        if not _fits(value, hints[key]):
+            shown = repr(value)
+            shown = shown if len(shown) <= 40 else shown[:37] + "..."
+            raise LedsimError(f"{key} {shown} is not allowed: must be "
+                              f"{_describe(hints[key])}")
+    cfg = cls(**{k: tuple(v) if isinstance(v, list) else v for k, v in saved.items()})
+    validate_run(cfg)
+    return cfg
+
+
+def _fits(value, hint) -> bool:
+    """Whether a JSON ``value`` is of the field type ``hint`` (an int is a float; a bool
+    is neither; a list of str is a ``tuple[str, ...]``)."""
+    if typing.get_origin(hint) in (types.UnionType, typing.Union):
+        return any(_fits(value, h) for h in typing.get_args(hint))
+    if typing.get_origin(hint) is tuple:
+        return isinstance(value, list) and all(_fits(v, typing.get_args(hint)[0])
+                                               for v in value)
+    if hint is float:
+        return isinstance(value, int | float) and not isinstance(value, bool)
+    if hint is int:
+        return isinstance(value, int) and not isinstance(value, bool)
+    return isinstance(value, hint)
+
+
+def _describe(hint) -> str:
+    """A field type in words: ``a number or null``, ``a list of strings``."""
+    if typing.get_origin(hint) in (types.UnionType, typing.Union):
+        return " or ".join(_describe(h) for h in typing.get_args(hint))
+    if typing.get_origin(hint) is tuple:
+        return "a list of strings"
+    return {float: "a number", int: "an integer", bool: "true or false", str: "a string",
+            type(None): "null"}.get(hint, hint.__name__)
