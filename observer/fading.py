@@ -40,6 +40,9 @@ class FadingChannel:
             (None: the fading of the pair's shape is not learned).
         min_snr: both powers must exceed this many noise standard deviations [-].
         time: time constant of the learned variances [s].
+        max_std: samples whose log-gain standard deviation exceeds this are not used
+            (the gain tracker's rule: far off the peak, or a pair an occluder shades on
+            one side, whose shape lies about phi and the gain alike) [-].
     """
 
     #: Pairs of successive samples a fading is learned from before it is believed: 50
@@ -47,12 +50,13 @@ class FadingChannel:
     MIN_LEARNED = 50
 
     def __init__(self, Te: float, shape_inverse, model_gain: float, phi_variance=None,
-                 min_snr: float = 5.0, time: float = 1.0):
+                 min_snr: float = 5.0, time: float = 1.0, max_std: float = 0.3):
         self.shape_inverse = shape_inverse
         self.model_gain = float(model_gain)
         self.phi_variance = phi_variance
         self.min_snr = float(min_snr)
         self.alpha = min(1.0, Te / time)
+        self.max_variance = max_std * max_std
         self._last: tuple | None = None  # (log-gain, phi, q) of the last sample
         self._learned = 0  # pairs of successive samples learned from
         # Variances of a sample's step (fading and noise) and of its noise alone: of
@@ -97,6 +101,9 @@ class FadingChannel:
             return self.fade
         var = sum(sg * sg for sg in sigma) / len(sigma)
         log_gain, noise = math.log(gain / self.model_gain), v * var
+        if noise > self.max_variance:  # far off the peak (or a shaded pair): no gain
+            self._last = None
+            return self.fade
         last, self._last = self._last, (log_gain, phi, q)
         if last is None:
             return self.fade
@@ -106,15 +113,18 @@ class FadingChannel:
         # is known within the acquisition's first second, not after several).
         self._learned += 1
         a = max(self.alpha, 1.0 / self._learned)
+        # The clip's floor is the noise learned so far, not this sample's own.
         self.step_variance += a * (_clipped((log_gain - last[0]) ** 2, self.step_variance,
-                                            2 * noise) - self.step_variance)
+                                            2 * (self.noise_variance or noise))
+                                   - self.step_variance)
         self.noise_variance += a * (noise - self.noise_variance)
         if q is not None and last[2] is not None and self.phi_variance is not None:
             phi_noise = self.phi_variance(phi, y, math.sqrt(var))
             if math.isfinite(phi_noise):
                 moved = (phi - last[1]) + (q - last[2])  # phi = phi_home - q
                 self.shape_step_variance += a * (_clipped(
-                    moved * moved, self.shape_step_variance, 2 * phi_noise)
+                    moved * moved, self.shape_step_variance,
+                    2 * (self.shape_noise_variance or phi_noise))
                     - self.shape_step_variance)
                 self.shape_noise_variance += a * (phi_noise - self.shape_noise_variance)
         fading = self.fade_variance

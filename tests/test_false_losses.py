@@ -277,3 +277,27 @@ def test_a_filter_is_told_the_runs_noise_scale_and_no_more_without_fading(estima
     assert est.models_its_noise and est.noise_scale == 3.0  # it assumed 1 before
     loop.run()
     assert est.noise_scale == 3.0  # no fading: the supervisor's factor stays 1
+
+
+def test_an_occluders_edge_teaches_no_fading(model):
+    # One photodiode shaded, the other not: the pair's shape lies about phi and the gain,
+    # whose inversion then claimed a 20-fold gain (the edge of a 0.5 s occlusion taught
+    # a fading that lasted seconds and the particle filter lost the beam).
+    rng = np.random.default_rng(9)
+    tr = _tracker(model)
+    ys = _faded(model, rng, 600, 0.0, 0.0, noise=0.03)
+    ys[300] = [0.16, ys[300][1]]
+    ys[301:351] = np.nan  # then the gate withholds the rest
+    for y in ys:
+        tr.sample(y, 0.0, 0.03)
+        assert tr.channel.fade_variance == 0.0 and tr.fade == 1.0
+
+
+@pytest.mark.parametrize("estimator", ["ekf", "pf"])
+def test_a_filter_restarts_after_an_occlusion_as_sure_as_it_was(estimator):
+    # From its whole box's spread, the particle filter re-converged for seconds after
+    # a 0.5 s occlusion (availability 0.87 over 4 seeds, against 0.94 for the others).
+    out = _run(estimator=estimator, disturbances=("occlusion:start=2,duration=0.5",),
+               seconds=6.0, particles=500)
+    assert out.metrics.loss_events == 0
+    assert out.metrics.rmse_steady["x1"] < 0.02
