@@ -1,5 +1,6 @@
 """Interrupted commands leave nothing behind: no output, no temporary file, exit 130."""
 
+import os
 import signal
 import subprocess
 import sys
@@ -67,3 +68,91 @@ def test_a_swallowed_interrupt_still_commits_nothing(tmp_path):
     finally:
         INTERRUPTED.clear()
     assert list(tmp_path.iterdir()) == []
+
+
+def _sleep(seconds):
+    time.sleep(seconds)
+    return seconds
+
+
+def _fail_job_1(job):
+    from ledsim.errors import LedsimError
+
+    if job == 1:
+        raise LedsimError("job 1 failed")
+    return _sleep(job)
+
+
+def _die(job):
+    os.kill(os.getpid(), signal.SIGKILL)
+
+
+def _draw(seed):
+    import numpy as np
+
+    return np.random.default_rng(seed).normal(size=3).tolist()
+
+
+def test_ctrl_c_stops_run_jobs_workers_at_once():
+    import multiprocessing
+    import threading
+
+    import ledsim.montecarlo as mc
+
+    threading.Timer(1.0, os.kill, (os.getpid(), signal.SIGINT)).start()
+    t0 = time.perf_counter()
+    with pytest.raises(KeyboardInterrupt):  # Python's own handler: a script's Ctrl-C
+        mc.run_jobs(_sleep, [30.0, 30.0, 30.0], workers=2, progress=False)
+    assert time.perf_counter() - t0 < 1.0 + 2.0  # not the 30 s the running jobs take
+    assert multiprocessing.active_children() == []
+
+
+def test_ctrl_c_while_the_workers_start_leaves_none_behind(monkeypatch):
+    import multiprocessing
+
+    import ledsim.montecarlo as mc
+
+    real_start = multiprocessing.process.BaseProcess.start
+
+    def start_then_ctrl_c(self):
+        real_start(self)
+        os.kill(os.getpid(), signal.SIGINT)  # between this fork and the next
+
+    monkeypatch.setattr(multiprocessing.process.BaseProcess, "start", start_then_ctrl_c)
+    with pytest.raises(KeyboardInterrupt):
+        mc.run_jobs(_sleep, [30.0, 30.0], workers=2, progress=False)
+    monkeypatch.undo()
+    assert multiprocessing.active_children() == []  # none left waiting on its pipe
+
+def test_a_failed_job_stops_the_workers_and_raises_its_own_error():
+    import multiprocessing
+
+    import ledsim.montecarlo as mc
+    from ledsim.errors import LedsimError
+
+    t0 = time.perf_counter()
+    with pytest.raises(LedsimError, match="job 1 failed") as info:
+        mc.run_jobs(_fail_job_1, [0.0, 1, 30.0, 30.0], workers=2, progress=False)
+    assert time.perf_counter() - t0 < 3.0
+    assert "Traceback" in str(info.value.__cause__)  # the worker's, for a bug
+    assert multiprocessing.active_children() == []
+
+
+def test_a_worker_that_dies_is_an_error_not_a_hang():
+    import ledsim.montecarlo as mc
+
+    with pytest.raises(mc.WorkerDied, match="died while running job 0"):
+        mc.run_jobs(_die, [0, 1], workers=2, progress=False)
+
+
+def test_results_do_not_depend_on_the_workers():
+    import ledsim.montecarlo as mc
+
+    seeds = list(range(7))
+    seen = []
+    one = mc.run_jobs(_draw, seeds, workers=1, progress=False)
+    assert one == mc.run_jobs(_draw, seeds, workers=3, progress=False,
+                              on_result=lambda job, res: seen.append(job)) == [
+        _draw(s) for s in seeds]
+    assert seen == seeds  # in job order
+
