@@ -156,3 +156,90 @@ def test_results_do_not_depend_on_the_workers():
         _draw(s) for s in seeds]
     assert seen == seeds  # in job order
 
+
+# Ctrl-C at 20 moments of one run with workers, from the imports to the last file: exit
+# 130 within 2 s of the signal, "interrupted", no traceback, an out folder untouched or
+# complete, no temporary beside it and no worker left (issue 46).
+MOMENTS = 20
+DEADLINE = 2.0  # seconds from the signal to the exit
+RUN = ["run", "--seconds", "3", "--seeds", "4", "--workers", "2", "--save-trace", "--quiet"]
+
+
+def _files(folder):
+    """Every file under ``folder`` (relative path -> bytes); empty if it is absent."""
+    if not folder.is_dir():
+        return {}
+    return {str(p.relative_to(folder)): p.read_bytes() for p in sorted(folder.rglob("*"))
+            if p.is_file()}
+
+
+def _group_alive(pgid):
+    """Whether a process of the group ``pgid`` is alive (not a zombie)."""
+    from pathlib import Path
+
+    for stat in Path("/proc").glob("[0-9]*/stat"):
+        try:
+            fields = stat.read_text().rsplit(")", 1)[1].split()
+        except (OSError, IndexError):
+            continue
+        if int(fields[2]) == pgid and fields[0] != "Z":
+            return True
+    return False
+
+
+@pytest.fixture(scope="module")
+def finished_run(tmp_path_factory):
+    """One uninterrupted run: its wall time [s] (the moments spread over it) and files."""
+    out = tmp_path_factory.mktemp("reference") / "out"
+    t0 = time.perf_counter()
+    r = subprocess.run([sys.executable, "-m", "ledsim", *RUN, "--out", str(out)],
+                       capture_output=True, text=True, timeout=300, cwd=out.parent)
+    assert r.returncode == 0, r.stderr
+    return time.perf_counter() - t0, _files(out)
+
+
+@pytest.mark.skipif(not sys.platform.startswith("linux"), reason="reads /proc")
+@pytest.mark.parametrize("k", range(MOMENTS))
+def test_ctrl_c_ends_a_run_with_workers_within_2_s_at_any_moment(tmp_path, finished_run, k):
+    span, reference = finished_run
+    moment = 0.05 + k * (0.9 * span - 0.05) / (MOMENTS - 1)  # from the imports on
+    out = tmp_path / "out"
+    if k % 2:  # an earlier run's folder: an interrupt must leave it byte-identical
+        out.mkdir()
+        for name, data in reference.items():
+            (out / name).write_bytes(data)
+    before = _files(out)
+    proc = subprocess.Popen([sys.executable, "-m", "ledsim", *RUN, "--out", str(out)],
+                            stdout=subprocess.DEVNULL, stderr=subprocess.PIPE, text=True,
+                            cwd=tmp_path, start_new_session=True)
+    try:
+        time.sleep(moment)
+        if proc.poll() is not None:
+            pytest.skip(f"the run ended before the signal at {moment:.2f} s")
+        if k % 4 < 2:  # a terminal's Ctrl-C reaches the whole group, workers too
+            os.killpg(proc.pid, signal.SIGINT)
+        else:  # kill -INT: the ledsim process alone
+            proc.send_signal(signal.SIGINT)
+        t0 = time.perf_counter()
+        try:
+            proc.wait(timeout=DEADLINE)
+        except subprocess.TimeoutExpired:
+            pytest.fail(f"Ctrl-C at {moment:.2f} s: no exit within {DEADLINE:g} s")
+        took = time.perf_counter() - t0
+        err = proc.stderr.read()
+        assert proc.returncode == 130, f"at {moment:.2f} s: {err}"
+        assert "interrupted" in err and "Traceback" not in err, f"at {moment:.2f} s: {err}"
+        time.sleep(0.3)  # a worker told to stop by its parent's death ends asynchronously
+        assert not _group_alive(proc.pid), f"at {moment:.2f} s: a worker outlived ledsim"
+    finally:
+        if proc.poll() is None or _group_alive(proc.pid):
+            os.killpg(proc.pid, signal.SIGKILL)
+        proc.wait()
+        proc.stderr.close()
+    after = _files(out)
+    # Untouched, or (a signal after the commit) the run's files: same seeds, same traces.
+    complete = set(after) == set(reference) and all(
+        after[n] == reference[n] for n in reference if n.endswith(".npz"))
+    assert after == before or complete, f"at {moment:.2f} s: {sorted(after)}"
+    assert [p.name for p in tmp_path.iterdir()] == (["out"] if after else []), \
+        f"at {moment:.2f} s, {took:.2f} s to exit: {sorted(p.name for p in tmp_path.iterdir())}"
