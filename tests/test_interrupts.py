@@ -157,6 +157,23 @@ def test_results_do_not_depend_on_the_workers():
     assert seen == seeds  # in job order
 
 
+def test_ctrl_c_as_a_finished_command_exits_keeps_its_exit_code():
+    # Python restores SIGINT's default as it finalizes: a Ctrl-C in the last moments of
+    # a finished run killed it by signal (status -2, no message), its output complete.
+    code = ("import sys, time\nimport ledsim.cli as cli\n"
+            "class Slow:\n    def __del__(self):\n"
+            "        print('finalizing', file=sys.stderr, flush=True)\n"
+            "        time.sleep(1.0)\n"
+            "slow = Slow()  # deleted as the interpreter finalizes\n"
+            "cli.main = lambda: 0\ncli.console()\n")
+    proc = subprocess.Popen([sys.executable, "-c", code], stderr=subprocess.PIPE, text=True)
+    assert proc.stderr.readline() == "finalizing\n"
+    proc.send_signal(signal.SIGINT)
+    _, err = proc.communicate(timeout=10)
+    assert proc.returncode == 0, err
+    assert "Traceback" not in err
+
+
 # Ctrl-C at 20 moments of one run with workers, from the imports to the last file: exit
 # 130 within 2 s of the signal, "interrupted", no traceback, an out folder untouched or
 # complete, no temporary beside it and no worker left (issue 46).

@@ -10,6 +10,7 @@ handles Ctrl-C before the heavy imports start.
 
 from __future__ import annotations
 
+import atexit
 import os
 import signal
 import sys
@@ -130,6 +131,10 @@ def console() -> None:
     :func:`main` on the command line's arguments, then exit with its code."""
     _State.console, _State.phase = True, "setup"
     signal.signal(signal.SIGINT, _on_sigint)  # first of all: Ctrl-C during the imports
+    # Python puts SIGINT back to its default as it finalizes, after the atexit callbacks:
+    # a Ctrl-C then would kill a finished command by signal (no message, status -2).
+    # Ignored from the last callback on (they run last registered, first).
+    atexit.register(signal.signal, signal.SIGINT, signal.SIG_IGN)
     code = main()
     _flush()
     if code == EXIT_INTERRUPTED:  # cleaned up: the interpreter's own exit can only delay
