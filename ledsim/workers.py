@@ -54,6 +54,8 @@ class Workers:
 
     def __init__(self, fn: Callable, n: int, report: Callable[[int | None], None]):
         ctx = multiprocessing.get_context()
+        # A forkserver's workers are its children, not ours: their parent is not checked.
+        parent = None if ctx.get_start_method() == "forkserver" else os.getpid()
         self.procs, self.links = [], []
         try:
             # A Ctrl-C between a fork and its bookkeeping would leave a worker nobody
@@ -64,7 +66,7 @@ class Workers:
                     here, there = ctx.Pipe()
                     self.links.append(here)
                     self.procs.append(ctx.Process(target=_serve, name="ledsim-worker",
-                                                  args=(there, fn, report, os.getpid())))
+                                                  args=(there, fn, report, parent)))
                     self.procs[-1].start()
                     there.close()
         except BaseException:
