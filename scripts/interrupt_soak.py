@@ -8,7 +8,9 @@ its start (``--seed`` fixes the moments), like a terminal's Ctrl-C: to the whole
 group (the workers too), or every other run to the ledsim process alone (``kill -INT``).
 Each run writes into an ``--out`` folder that already holds a finished run's files, so
 an interrupt must leave it byte-identical (or, when the signal came after the commit,
-complete with the new run's files), with no temporary left beside it.
+complete with the new run's files), with no temporary left beside it. A sweep starts
+from no folder (it would resume from the finished one and run nothing): it may leave
+the cells it finished, each whole, for the next run to resume from.
 
 Counted per run: a hang (no exit within ``--deadline`` s of the signal: the run is then
 killed with SIGKILL), a traceback on stderr, a missing ``interrupted`` line or an exit
@@ -38,7 +40,7 @@ COMMANDS = {
             "--save-trace"],
     "sweep": ["sweep", "--seconds", "{seconds}", "--seeds", "{seeds}", "--workers",
               "{workers}", "--estimator", "kkl", "--estimator", "ekf"],
-    "demo": ["demo", "--seeds", "{seeds}", "--no-video"],
+    "demo": ["demo", "--seeds", "{seeds}"],
     "evaluate": ["evaluate", "--scenario", "if1", "--seeds", "{seeds}", "--workers",
                  "{workers}"],
 }
@@ -75,7 +77,9 @@ def group_alive(pgid: int) -> bool:
 
 def one_run(args, cmd_out: Path, original: dict, names: set, moment: float,
             to_group: bool) -> dict:
-    """Start the command, SIGINT it ``moment`` s later, and judge how it ended."""
+    """Start the command, SIGINT it ``moment`` s later, and judge how it ended: ``out``
+    must hold ``original`` (the files it held before) or the run's files ``names``
+    (a sweep: also a part of them, the cells finished, each whole)."""
     env = {**os.environ, "MUJOCO_GL": os.environ.get("MUJOCO_GL", "osmesa")}
     proc = subprocess.Popen(command(args, cmd_out), stdout=subprocess.DEVNULL,
                             stderr=subprocess.PIPE, env=env, start_new_session=True,
@@ -116,13 +120,24 @@ def one_run(args, cmd_out: Path, original: dict, names: set, moment: float,
     now = snapshot(cmd_out)
     leftovers = sorted(p.name for p in cmd_out.parent.iterdir() if p != cmd_out)
     complete = set(now) >= names and now != original
+    resumable = args.command == "sweep" and set(now) <= names and all(
+        _whole_json(data) for name, data in now.items() if name.endswith(".json"))
     return {"moment": round(moment, 3), "group": to_group, "finished": finished,
             "exit": proc.returncode, "seconds": None if hang else round(elapsed, 3),
             "hang": hang, "late_exit": late, "traceback": "Traceback" in err,
             "interrupted": "interrupted" in err, "forced": "forced" in err,
-            "out": "untouched" if now == original else "complete" if complete else "broken",
+            "out": "untouched" if now == original else "complete" if complete else
+                   "resumable" if resumable else "broken",
             "leftovers": leftovers, "orphans": orphans,
             "stderr": err.strip().splitlines()[-3:]}
+
+
+def _whole_json(data: bytes) -> bool:
+    try:
+        json.loads(data)
+    except ValueError:
+        return False
+    return True
 
 
 def judge(r: dict) -> list[str]:
@@ -174,14 +189,18 @@ def main() -> int:
             print(f"interrupt_soak: the uninterrupted run failed: {r.stderr.strip()}",
                   file=sys.stderr)
             return 1
-        original = snapshot(ref)
+        original = names = snapshot(ref)
         rng = random.Random(args.seed)
         moments = sorted(rng.uniform(0.0, span) for _ in range(args.runs))
         results = []
         for k, moment in enumerate(moments):
             folder = work / f"run{k}"
-            shutil.copytree(ref, folder / "out")
-            res = one_run(args, folder / "out", original, set(original), moment,
+            if args.command == "sweep":  # it resumes from the cells it finds: none
+                folder.mkdir()
+                original = {}
+            else:  # a finished run's folder: an interrupt must leave it as it was
+                shutil.copytree(ref, folder / "out")
+            res = one_run(args, folder / "out", original, set(names), moment,
                           to_group=k % 2 == 0)
             res["wrong"] = judge(res)
             results.append(res)
@@ -225,8 +244,8 @@ def summary(args, span: float, results: list[dict]) -> dict:
 def summary_table(args, span: float, results: list[dict]) -> str:
     s = summary(args, span, results)
     fmt = (lambda v: "-" if v is None else f"{v:.2f} s")  # noqa: E731
-    rows = [("command", f"ledsim {args.command} ({span:.1f} s uninterrupted, "
-                        f"--workers {args.workers})"),
+    workers = f", --workers {args.workers}" if "{workers}" in COMMANDS[args.command] else ""
+    rows = [("command", f"ledsim {args.command} ({span:.1f} s uninterrupted{workers})"),
             ("interrupts", f"{s['interrupted']} of {s['runs']} runs "
                            f"({s['finished_before_signal']} finished first)"),
             (f"hangs (no exit within {args.deadline:g} s)", s["hangs"]),
