@@ -177,6 +177,8 @@ def main() -> int:
     args = ap.parse_args()
     if args.runs < 1 or args.deadline <= 0 or args.patience < 0:
         ap.error("--runs must be >= 1, --deadline > 0 and --patience >= 0")
+    # Stopped (timeout, kill): unwind, so that no run and no folder is left behind.
+    signal.signal(signal.SIGTERM, lambda signum, frame: sys.exit(1))
     work = Path(tempfile.mkdtemp(prefix="interrupt_soak."))
     try:
         ref = work / "ref" / "out"
