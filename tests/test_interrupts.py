@@ -179,6 +179,9 @@ def test_ctrl_c_as_a_finished_command_exits_keeps_its_exit_code():
 # complete, no temporary beside it and no worker left (issue 46).
 MOMENTS = 20
 DEADLINE = 2.0  # seconds from the signal to the exit
+# The first moment [s]: during ledsim's imports, after Python's own start-up (20-80 ms,
+# before a line of ledsim runs, when Python's default handler would print a traceback).
+FIRST = 0.25
 RUN = ["run", "--seconds", "3", "--seeds", "4", "--workers", "2", "--save-trace", "--quiet"]
 
 
@@ -219,7 +222,7 @@ def finished_run(tmp_path_factory):
 @pytest.mark.parametrize("k", range(MOMENTS))
 def test_ctrl_c_ends_a_run_with_workers_within_2_s_at_any_moment(tmp_path, finished_run, k):
     span, reference = finished_run
-    moment = 0.05 + k * (0.9 * span - 0.05) / (MOMENTS - 1)  # from the imports on
+    moment = FIRST + k * (0.9 * span - FIRST) / (MOMENTS - 1)
     out = tmp_path / "out"
     if k % 2:  # an earlier run's folder: an interrupt must leave it byte-identical
         out.mkdir()
@@ -244,8 +247,11 @@ def test_ctrl_c_ends_a_run_with_workers_within_2_s_at_any_moment(tmp_path, finis
             pytest.fail(f"Ctrl-C at {moment:.2f} s: no exit within {DEADLINE:g} s")
         took = time.perf_counter() - t0
         err = proc.stderr.read()
-        assert proc.returncode == 130, f"at {moment:.2f} s: {err}"
-        assert "interrupted" in err and "Traceback" not in err, f"at {moment:.2f} s: {err}"
+        # 0: the signal came as the finished run exited (then its files must be there).
+        assert proc.returncode in (130, 0), f"at {moment:.2f} s: {err}"
+        finished = proc.returncode == 0
+        assert ("interrupted" in err) != finished and "Traceback" not in err, \
+            f"at {moment:.2f} s: {err}"
         time.sleep(0.3)  # a worker told to stop by its parent's death ends asynchronously
         assert not _group_alive(proc.pid), f"at {moment:.2f} s: a worker outlived ledsim"
     finally:
@@ -257,6 +263,7 @@ def test_ctrl_c_ends_a_run_with_workers_within_2_s_at_any_moment(tmp_path, finis
     # Untouched, or (a signal after the commit) the run's files: same seeds, same traces.
     complete = set(after) == set(reference) and all(
         after[n] == reference[n] for n in reference if n.endswith(".npz"))
-    assert after == before or complete, f"at {moment:.2f} s: {sorted(after)}"
+    assert complete if finished else (after == before or complete), \
+        f"at {moment:.2f} s: {sorted(after)}"
     assert [p.name for p in tmp_path.iterdir()] == (["out"] if after else []), \
         f"at {moment:.2f} s, {took:.2f} s to exit: {sorted(p.name for p in tmp_path.iterdir())}"
