@@ -4,15 +4,17 @@ leaving no output and no temporary behind.
 
 The parser is built from the registries (scenarios, estimators, presets, disturbances),
 so ``ledsim COMMAND --help`` lists every choice with its default. This module imports
-only the standard library's lightest modules: the ``ledsim`` command (:func:`console`)
-handles Ctrl-C before the heavy imports start.
+only modules that Python has loaded already: the ``ledsim`` command (:func:`console`)
+handles Ctrl-C before the heavy imports start. Before that, for the first 20-80 ms,
+Python itself is starting (``site``, ``runpy``): a Ctrl-C then gets Python's default
+handling (a KeyboardInterrupt traceback), out of ledsim's reach.
 """
 
 from __future__ import annotations
 
+import _signal as signal  # the C module: ``signal`` first builds its enums (about 1 ms)
 import atexit
 import os
-import signal
 import sys
 
 EXIT_INTERRUPTED = 130
