@@ -12,10 +12,10 @@ complete with the new run's files), with no temporary left beside it. A sweep st
 from no folder (it would resume from the finished one and run nothing): it may leave
 the cells it finished, each whole, for the next run to resume from.
 
-A Ctrl-C in the first few tens of milliseconds, while Python itself starts (site, with
-an editable install setuptools' finder; runpy), comes before any line of ledsim runs:
-Python's default handler prints a traceback then. Such tracebacks (no frame in the
-ledsim package) are counted apart.
+A Ctrl-C in the first 20-80 ms, while Python itself starts (``site``, with an editable
+install setuptools' finder; ``runpy``), comes before ledsim's handler is installed (the
+first thing ``ledsim.cli.console`` does): Python's default handler prints a traceback
+then. Such tracebacks (no ``console`` frame) are counted apart.
 
 Counted per run: a hang (no exit within ``--deadline`` s of the signal: the run is then
 killed with SIGKILL), a traceback on stderr, a missing ``interrupted`` line or an exit
@@ -30,7 +30,6 @@ import argparse
 import json
 import os
 import random
-import re
 import shutil
 import signal
 import statistics
@@ -131,9 +130,9 @@ def one_run(args, cmd_out: Path, original: dict, names: set, moment: float,
     return {"moment": round(moment, 3), "group": to_group, "finished": finished,
             "exit": proc.returncode, "seconds": None if hang else round(elapsed, 3),
             "hang": hang, "late_exit": late, "traceback": "Traceback" in err,
-            # Python's own start-up (site, runpy), before a line of ledsim ran: out of
-            # ledsim's reach (see the module docstring)
-            "before_ledsim": "Traceback" in err and re.search(r'File ".*/ledsim/', err) is None,
+            # before ledsim's handler (installed first thing in console()): Python's own
+            # start-up, out of ledsim's reach (see the module docstring)
+            "before_handler": "Traceback" in err and ", in console" not in err,
             "interrupted": "interrupted" in err, "forced": "forced" in err,
             "out": "untouched" if now == original else "complete" if complete else
                    "resumable" if resumable else "broken",
@@ -240,7 +239,7 @@ def summary(args, span: float, results: list[dict]) -> dict:
             "hangs": sum(r["hang"] for r in results),
             "hangs_that_ended_later": sum(r["late_exit"] is not None for r in results),
             "tracebacks": sum(r["traceback"] for r in results),
-            "tracebacks_before_ledsim_ran": sum(r["before_ledsim"] for r in results),
+            "tracebacks_before_the_handler": sum(r["before_handler"] for r in results),
             "forced_exits": sum(r["forced"] for r in results),
             "broken_outputs": sum(r["out"] == "broken" or bool(r["leftovers"])
                                   for r in results),
@@ -264,8 +263,8 @@ def summary_table(args, span: float, results: list[dict]) -> str:
             *([(f"... of which ended within {args.patience:g} s more",
                 s["hangs_that_ended_later"])] if args.patience else []),
             ("tracebacks", s["tracebacks"]),
-            ("... of which in Python's start-up, before ledsim ran",
-             s["tracebacks_before_ledsim_ran"]),
+            ("... of which in Python's start-up, before ledsim's handler",
+             s["tracebacks_before_the_handler"]),
             ("forced exits", s["forced_exits"]), ("broken outputs", s["broken_outputs"]),
             ("orphaned workers", s["orphans"]),
             ("wrong exit code or message", s["wrong_exit_or_message"]),
