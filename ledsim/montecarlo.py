@@ -4,26 +4,27 @@ or on a Ray cluster (:func:`run_jobs_ray`).
 Every table, ``ledsim evaluate``, ``ledsim run`` and the disturbance table go through
 :func:`run_jobs`. A job is ``fn(arg)`` with a picklable ``arg``; each job derives all its
 random numbers from its own seed, so results do not depend on the number of workers or on
-the order in which they finish. Workers run one torch thread each and die with their
-parent (Linux ``PR_SET_PDEATHSIG``), so a killed ``ledsim run`` leaves no orphans behind.
+the order in which they finish. Workers (:mod:`ledsim.workers`) run one torch thread each
+and die with their parent (Linux ``PR_SET_PDEATHSIG``), so a killed ``ledsim run`` leaves
+no orphans behind; Ctrl-C or a failed job stops them within
+:data:`~ledsim.workers.STOP_GRACE` s.
 """
 
 from __future__ import annotations
 
-import ctypes
 import multiprocessing
 import os
-import signal
 import socket
 import sys
 from collections.abc import Callable, Sequence
-from concurrent.futures import ProcessPoolExecutor
-from concurrent.futures import TimeoutError as FuturesTimeout
+from functools import partial
 from typing import TypeVar
 
 from tqdm.auto import tqdm
 
 from .errors import LedsimError
+from .outputs import check_interrupt
+from .workers import RemoteTraceback, WorkerDied, Workers  # noqa: F401 (re-exported)
 
 #: One BLAS/OpenMP thread per process, so that N workers use N cores. Effective only
 #: when set before numpy loads (Ray: its runtime environment; the CLI, the scripts:
@@ -37,25 +38,18 @@ def pin_blas_threads() -> None:
     Importing this module does not import numpy."""
     for var, value in WORKER_ENV.items():
         os.environ.setdefault(var, value)
+
+
 T = TypeVar("T")
 R = TypeVar("R")
 
-
-def _die_with_parent() -> None:
-    """Ask the kernel to end this worker when its parent dies (Linux; no-op elsewhere)."""
-    if sys.platform.startswith("linux"):
-        try:
-            libc = ctypes.CDLL("libc.so.6", use_errno=True)
-            libc.prctl(1, signal.SIGTERM)  # PR_SET_PDEATHSIG
-        except OSError:
-            pass
-    signal.signal(signal.SIGINT, signal.SIG_IGN)  # the parent handles Ctrl-C
+#: Seconds between two looks at the workers' progress (the bar, a swallowed Ctrl-C).
+TICK = 0.5
 
 
 #: How a running job reports its progress (:func:`report_progress`), set by
 #: :func:`run_jobs` around each job: in this process, or in a worker.
 _REPORT: Callable[[float], None] | None = None
-_SHARES = None  # a worker's view of the shares done of every job (shared memory)
 
 
 def report_progress(share: float) -> None:
@@ -66,23 +60,11 @@ def report_progress(share: float) -> None:
         _REPORT(share)
 
 
-def _tracked(item):
-    """``fn(job)`` of ``item = (fn, k, job)`` in a worker, its progress in share k."""
+def _route_reports(shares, k: int | None) -> None:
+    """In a worker: the reports of job ``k`` go to its share in ``shares`` (None: the
+    job ended)."""
     global _REPORT
-    fn, k, job = item
-    _REPORT = lambda share: _SHARES.__setitem__(k, share)  # noqa: E731
-    try:
-        return fn(job)
-    finally:
-        _REPORT = None
-
-
-def _init_worker(shares=None) -> None:
-    global _SHARES
-    _SHARES = shares
-    _die_with_parent()
-    if "torch" in sys.modules:  # two workers on two cores, not four threads fighting
-        sys.modules["torch"].set_num_threads(1)
+    _REPORT = None if k is None else partial(shares.__setitem__, k)
 
 
 def run_jobs(fn: Callable[[T], R], jobs: Sequence[T], workers: int = 1, desc: str = "",
@@ -90,6 +72,10 @@ def run_jobs(fn: Callable[[T], R], jobs: Sequence[T], workers: int = 1, desc: st
              on_result: Callable[[T, R], None] | None = None,
              sizes: Sequence[int] | None = None) -> list[R]:
     """``[fn(job) for job in jobs]``, on ``workers`` processes when that helps.
+
+    Ctrl-C (KeyboardInterrupt) or a failed job stops the workers at once (SIGTERM, then
+    SIGKILL after :data:`~ledsim.workers.STOP_GRACE` s); the exception is then raised
+    here, a job's caused by its traceback in the worker.
 
     Args:
         fn: a module-level function (it is pickled to the workers).
@@ -108,14 +94,9 @@ def run_jobs(fn: Callable[[T], R], jobs: Sequence[T], workers: int = 1, desc: st
     if workers <= 1:
         return _collect_here(fn, jobs, bar, on_result, sizes)
     shares = multiprocessing.Array("d", len(jobs), lock=False)
-    with ProcessPoolExecutor(workers, initializer=_init_worker, initargs=(shares,)) as pool:
-        futures = [pool.submit(_tracked, (fn, k, job)) for k, job in enumerate(jobs)]
-        try:
-            return _collect(jobs, futures, bar, on_result, sizes, shares)
-        except BaseException:  # Ctrl-C, a failed job: the queued jobs do not start
-            for f in futures:
-                f.cancel()
-            raise
+    # Ctrl-C or a failed job: leaving the block stops the workers at once.
+    with Workers(fn, workers, partial(_route_reports, shares)) as pool:
+        return _collect(jobs, pool, bar, on_result, sizes, shares)
 
 
 def run_jobs_ray(fn: Callable[[T], R], jobs: Sequence[T], workers: int = 2,
@@ -196,6 +177,11 @@ def _move(shown, position: float) -> None:
         shown.refresh()
 
 
+def _report_here(shown, at: float, size: float, share: float) -> None:
+    check_interrupt()  # a Ctrl-C that Python swallowed (in a callback) stops the job too
+    _move(shown, at + size * share)
+
+
 def _collect_here(fn, jobs, bar: dict, on_result, sizes: list) -> list:
     """``fn`` of each job in this process, in order; the bar follows each job's reports
     and advances by its size when it is done."""
@@ -203,7 +189,7 @@ def _collect_here(fn, jobs, bar: dict, on_result, sizes: list) -> list:
     results, done = [], 0.0
     with tqdm(**bar) as shown:
         for job, size in zip(jobs, sizes, strict=True):
-            _REPORT = lambda share, at=done, size=size: _move(shown, at + size * share)  # noqa: E731
+            _REPORT = partial(_report_here, shown, done, size)
             try:
                 res = fn(job)
             finally:
@@ -216,22 +202,43 @@ def _collect_here(fn, jobs, bar: dict, on_result, sizes: list) -> list:
     return results
 
 
-def _collect(jobs, futures, bar: dict, on_result, sizes: list, shares) -> list:
-    """The results of ``futures`` (one per job, in job order); the bar at the finished
-    jobs' sizes plus the running ones' shares of theirs, looked at twice a second."""
+def _collect(jobs, pool: Workers, bar: dict, on_result, sizes: list, shares) -> list:
+    """The results of ``jobs`` on the workers of ``pool``, handed out one at a time to
+    whichever is free, returned (and given to ``on_result``) in job order. The bar shows
+    the finished jobs' sizes plus the running ones' shares of theirs, looked at every
+    :data:`TICK` s. A failed job's exception is raised when its turn comes, so the jobs
+    before it still reach ``on_result`` first."""
+    todo = iter(range(len(jobs)))
+    running: dict[int, int] = {}  # worker -> index of the job it runs
+    done: dict[int, tuple[bool, object]] = {}
+    failed = len(jobs)  # the first failed job: no job after it is handed out
+
+    def hand_out(i: int) -> None:
+        k = next(todo, None)
+        if k is not None and k < failed:
+            pool.send(i, k, jobs[k])
+            running[i] = k
+
     results = []
     with tqdm(**bar) as shown:
-        for k, (job, future) in enumerate(zip(jobs, futures, strict=True)):
-            while True:
-                try:
-                    res = future.result(timeout=0.5)
-                    break
-                except FuturesTimeout:
-                    _move(shown, sum(sizes[:k]) + sum(
-                        size * share for size, share in zip(sizes[k:], shares[k:],
-                                                            strict=True)))
-            if on_result is not None:
-                on_result(job, res)
-            results.append(res)
-            _move(shown, sum(sizes[:k + 1]))
+        for i in range(len(pool.procs)):
+            hand_out(i)
+        while len(results) < len(jobs):
+            check_interrupt()  # a Ctrl-C that Python swallowed
+            for i in pool.ready(list(running), TICK):
+                k = running.pop(i)
+                done[k] = pool.receive(i, k)
+                if not done[k][0]:
+                    failed = min(failed, k)
+                hand_out(i)
+            while len(results) in done:
+                ok, value = done.pop(len(results))
+                if not ok:
+                    raise value
+                if on_result is not None:
+                    on_result(jobs[len(results)], value)
+                results.append(value)
+            k = len(results)
+            _move(shown, sum(sizes[:k]) + sum(size * shares[j] for j, size in
+                                              enumerate(sizes[k:], k)))
     return results

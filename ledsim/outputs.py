@@ -5,6 +5,7 @@ from __future__ import annotations
 
 import os
 import shutil
+import signal
 import tempfile
 import threading
 from collections.abc import Iterator
@@ -18,11 +19,64 @@ from .errors import LedsimError
 #: no output is then committed (:func:`check_interrupt` before every final rename).
 INTERRUPTED = threading.Event()
 
+#: The temporaries being written (files and folders beside their final names), for
+#: :func:`discard_temporaries`.
+_TEMPORARIES: set[Path] = set()
+#: Held while outputs are renamed into place: :func:`discard_temporaries` waits for it.
+_COMMITTING = threading.Lock()
+
 
 def check_interrupt() -> None:
     """Raise KeyboardInterrupt if an interrupt was requested, even a swallowed one."""
     if INTERRUPTED.is_set():
         raise KeyboardInterrupt
+
+
+@contextmanager
+def deferred_sigint() -> Iterator[None]:
+    """Hold Ctrl-C (SIGINT) back during the block and deliver it at its end, to the handler
+    that was there before: for steps that an interrupt must not cut in two (starting a
+    worker process, renaming a command's files into place), each quick.
+
+    Only the main thread handles signals: elsewhere, or under a handler not installed from
+    Python, the block runs as is."""
+    if threading.current_thread() is not threading.main_thread():
+        yield
+        return
+    previous = signal.getsignal(signal.SIGINT)
+    if previous in (None, signal.SIG_IGN):  # not Python's to hold back, or nothing to hold
+        yield
+        return
+    held = []
+    signal.signal(signal.SIGINT, lambda signum, frame: held.append(signum))
+    try:
+        yield
+    finally:
+        signal.signal(signal.SIGINT, previous)
+        if held:
+            signal.raise_signal(signal.SIGINT)
+
+
+@contextmanager
+def _committing() -> Iterator[None]:
+    """Renaming outputs into place: not cut by Ctrl-C, nor by :func:`discard_temporaries`."""
+    with deferred_sigint(), _COMMITTING:
+        yield
+
+
+def discard_temporaries() -> None:
+    """Remove every temporary still being written, once any rename into place is done,
+    and allow no rename after: the last resort of a process that must exit at once
+    (``ledsim`` after Ctrl-C, when its cleanup overruns). Does not return the lock."""
+    _COMMITTING.acquire()
+    for tmp in list(_TEMPORARIES):
+        if tmp.is_dir():
+            shutil.rmtree(tmp, ignore_errors=True)
+        else:
+            try:
+                tmp.unlink()
+            except OSError:
+                pass
 
 
 def umask() -> int:
@@ -37,17 +91,22 @@ def atomic_write_bytes(path: Path, write) -> None:
     file gets the usual mode (0666 less the umask)."""
     path = Path(path)
     path.parent.mkdir(parents=True, exist_ok=True)
-    fd, tmp = tempfile.mkstemp(dir=path.parent, prefix=f".{path.name}.", suffix=".tmp")
-    os.close(fd)
+    with deferred_sigint():  # no temporary made but not known
+        fd, tmp = tempfile.mkstemp(dir=path.parent, prefix=f".{path.name}.", suffix=".tmp")
+        _TEMPORARIES.add(Path(tmp))
     try:
+        os.close(fd)
         write(tmp)
         os.chmod(tmp, 0o666 & ~umask())  # mkstemp makes 0600
-        check_interrupt()
-        os.replace(tmp, path)
+        with _committing():
+            check_interrupt()
+            os.replace(tmp, path)
     except BaseException:
         if os.path.exists(tmp):
             os.unlink(tmp)
         raise
+    finally:
+        _TEMPORARIES.discard(Path(tmp))
 
 
 def atomic_write_text(path: Path, text: str) -> None:
@@ -70,7 +129,8 @@ def _can_create_in(folder: Path) -> bool:
     if not folder.is_dir() or not os.access(folder, os.W_OK | os.X_OK):
         return False
     try:
-        os.rmdir(tempfile.mkdtemp(dir=folder, prefix=".ledsim-probe."))
+        with deferred_sigint():  # Ctrl-C would leave the probe behind
+            os.rmdir(tempfile.mkdtemp(dir=folder, prefix=".ledsim-probe."))
     except OSError:
         return False
     return True
@@ -117,18 +177,30 @@ def output_folder(out: str | Path) -> Iterator[Path]:
 
     Everything is written beside ``out`` under a unique temporary name, so an error or
     an interrupt leaves ``out`` as it was, and two runs to the same ``out`` never share
-    a file. A new ``out`` appears in one rename.
+    a file. A new ``out`` appears in one rename; into an existing ``out`` the entries
+    move one by one, with Ctrl-C held back until the last (:func:`deferred_sigint`).
     """
     out = Path(out)
     out.parent.mkdir(parents=True, exist_ok=True)
-    tmp = Path(tempfile.mkdtemp(dir=out.parent, prefix=f".{out.name}.", suffix=".partial"))
-    os.chmod(tmp, 0o777 & ~umask())  # mkdtemp makes 0700
+    with deferred_sigint():  # no temporary made but not known
+        tmp = Path(tempfile.mkdtemp(dir=out.parent, prefix=f".{out.name}.", suffix=".partial"))
+        _TEMPORARIES.add(tmp)
     try:
+        os.chmod(tmp, 0o777 & ~umask())  # mkdtemp makes 0700
         yield tmp
-        check_interrupt()
+        with _committing():
+            check_interrupt()
+            _move_into(tmp, out)
     except BaseException:
         shutil.rmtree(tmp, ignore_errors=True)
         raise
+    finally:
+        _TEMPORARIES.discard(tmp)
+
+
+def _move_into(tmp: Path, out: Path) -> None:
+    """The entries of folder ``tmp`` into ``out`` (replacing those of the same name), or
+    ``tmp`` renamed to ``out`` if there is none."""
     if not out.exists():
         os.replace(tmp, out)
         return

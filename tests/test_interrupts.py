@@ -1,5 +1,6 @@
 """Interrupted commands leave nothing behind: no output, no temporary file, exit 130."""
 
+import os
 import signal
 import subprocess
 import sys
@@ -67,3 +68,202 @@ def test_a_swallowed_interrupt_still_commits_nothing(tmp_path):
     finally:
         INTERRUPTED.clear()
     assert list(tmp_path.iterdir()) == []
+
+
+def _sleep(seconds):
+    time.sleep(seconds)
+    return seconds
+
+
+def _fail_job_1(job):
+    from ledsim.errors import LedsimError
+
+    if job == 1:
+        raise LedsimError("job 1 failed")
+    return _sleep(job)
+
+
+def _die(job):
+    os.kill(os.getpid(), signal.SIGKILL)
+
+
+def _draw(seed):
+    import numpy as np
+
+    return np.random.default_rng(seed).normal(size=3).tolist()
+
+
+def test_ctrl_c_stops_run_jobs_workers_at_once():
+    import multiprocessing
+    import threading
+
+    import ledsim.montecarlo as mc
+
+    threading.Timer(1.0, os.kill, (os.getpid(), signal.SIGINT)).start()
+    t0 = time.perf_counter()
+    with pytest.raises(KeyboardInterrupt):  # Python's own handler: a script's Ctrl-C
+        mc.run_jobs(_sleep, [30.0, 30.0, 30.0], workers=2, progress=False)
+    assert time.perf_counter() - t0 < 1.0 + 2.0  # not the 30 s the running jobs take
+    assert multiprocessing.active_children() == []
+
+
+def test_ctrl_c_while_the_workers_start_leaves_none_behind(monkeypatch):
+    import multiprocessing
+
+    import ledsim.montecarlo as mc
+
+    real_start = multiprocessing.process.BaseProcess.start
+
+    def start_then_ctrl_c(self):
+        real_start(self)
+        os.kill(os.getpid(), signal.SIGINT)  # between this fork and the next
+
+    monkeypatch.setattr(multiprocessing.process.BaseProcess, "start", start_then_ctrl_c)
+    with pytest.raises(KeyboardInterrupt):
+        mc.run_jobs(_sleep, [30.0, 30.0], workers=2, progress=False)
+    monkeypatch.undo()
+    assert multiprocessing.active_children() == []  # none left waiting on its pipe
+
+def test_a_failed_job_stops_the_workers_and_raises_its_own_error():
+    import multiprocessing
+
+    import ledsim.montecarlo as mc
+    from ledsim.errors import LedsimError
+
+    t0 = time.perf_counter()
+    with pytest.raises(LedsimError, match="job 1 failed") as info:
+        mc.run_jobs(_fail_job_1, [0.0, 1, 30.0, 30.0], workers=2, progress=False)
+    assert time.perf_counter() - t0 < 3.0
+    assert "Traceback" in str(info.value.__cause__)  # the worker's, for a bug
+    assert multiprocessing.active_children() == []
+
+
+def test_a_worker_that_dies_is_an_error_not_a_hang():
+    import ledsim.montecarlo as mc
+
+    with pytest.raises(mc.WorkerDied, match="died while running job 0"):
+        mc.run_jobs(_die, [0, 1], workers=2, progress=False)
+
+
+def test_results_do_not_depend_on_the_workers():
+    import ledsim.montecarlo as mc
+
+    seeds = list(range(7))
+    seen = []
+    one = mc.run_jobs(_draw, seeds, workers=1, progress=False)
+    assert one == mc.run_jobs(_draw, seeds, workers=3, progress=False,
+                              on_result=lambda job, res: seen.append(job)) == [
+        _draw(s) for s in seeds]
+    assert seen == seeds  # in job order
+
+
+def test_ctrl_c_as_a_finished_command_exits_keeps_its_exit_code():
+    # Python restores SIGINT's default as it finalizes: a Ctrl-C in the last moments of
+    # a finished run killed it by signal (status -2, no message), its output complete.
+    code = ("import sys, time\nimport ledsim.cli as cli\n"
+            "class Slow:\n    def __del__(self):\n"
+            "        print('finalizing', file=sys.stderr, flush=True)\n"
+            "        time.sleep(1.0)\n"
+            "slow = Slow()  # deleted as the interpreter finalizes\n"
+            "cli.main = lambda: 0\ncli.console()\n")
+    proc = subprocess.Popen([sys.executable, "-c", code], stderr=subprocess.PIPE, text=True)
+    assert proc.stderr.readline() == "finalizing\n"
+    proc.send_signal(signal.SIGINT)
+    _, err = proc.communicate(timeout=10)
+    assert proc.returncode == 0, err
+    assert "Traceback" not in err
+
+
+# Ctrl-C at 20 moments of one run with workers, from the imports to the last file: exit
+# 130 within 2 s of the signal, "interrupted", no traceback, an out folder untouched or
+# complete, no temporary beside it and no worker left (issue 46).
+MOMENTS = 20
+DEADLINE = 2.0  # seconds from the signal to the exit
+# The first moment [s]: during ledsim's imports, after Python's own start-up (20-80 ms,
+# before a line of ledsim runs, when Python's default handler would print a traceback).
+FIRST = 0.25
+RUN = ["run", "--seconds", "3", "--seeds", "4", "--workers", "2", "--save-trace", "--quiet"]
+
+
+def _files(folder):
+    """Every file under ``folder`` (relative path -> bytes); empty if it is absent."""
+    if not folder.is_dir():
+        return {}
+    return {str(p.relative_to(folder)): p.read_bytes() for p in sorted(folder.rglob("*"))
+            if p.is_file()}
+
+
+def _group_alive(pgid):
+    """Whether a process of the group ``pgid`` is alive (not a zombie)."""
+    from pathlib import Path
+
+    for stat in Path("/proc").glob("[0-9]*/stat"):
+        try:
+            fields = stat.read_text().rsplit(")", 1)[1].split()
+        except (OSError, IndexError):
+            continue
+        if int(fields[2]) == pgid and fields[0] != "Z":
+            return True
+    return False
+
+
+@pytest.fixture(scope="module")
+def finished_run(tmp_path_factory):
+    """One uninterrupted run: its wall time [s] (the moments spread over it) and files."""
+    out = tmp_path_factory.mktemp("reference") / "out"
+    t0 = time.perf_counter()
+    r = subprocess.run([sys.executable, "-m", "ledsim", *RUN, "--out", str(out)],
+                       capture_output=True, text=True, timeout=300, cwd=out.parent)
+    assert r.returncode == 0, r.stderr
+    return time.perf_counter() - t0, _files(out)
+
+
+@pytest.mark.skipif(not sys.platform.startswith("linux"), reason="reads /proc")
+@pytest.mark.parametrize("k", range(MOMENTS))
+def test_ctrl_c_ends_a_run_with_workers_within_2_s_at_any_moment(tmp_path, finished_run, k):
+    span, reference = finished_run
+    moment = FIRST + k * (0.9 * span - FIRST) / (MOMENTS - 1)
+    out = tmp_path / "out"
+    if k % 2:  # an earlier run's folder: an interrupt must leave it byte-identical
+        out.mkdir()
+        for name, data in reference.items():
+            (out / name).write_bytes(data)
+    before = _files(out)
+    proc = subprocess.Popen([sys.executable, "-m", "ledsim", *RUN, "--out", str(out)],
+                            stdout=subprocess.DEVNULL, stderr=subprocess.PIPE, text=True,
+                            cwd=tmp_path, start_new_session=True)
+    try:
+        time.sleep(moment)
+        if proc.poll() is not None:
+            pytest.skip(f"the run ended before the signal at {moment:.2f} s")
+        if k % 4 < 2:  # a terminal's Ctrl-C reaches the whole group, workers too
+            os.killpg(proc.pid, signal.SIGINT)
+        else:  # kill -INT: the ledsim process alone
+            proc.send_signal(signal.SIGINT)
+        t0 = time.perf_counter()
+        try:
+            proc.wait(timeout=DEADLINE)
+        except subprocess.TimeoutExpired:
+            pytest.fail(f"Ctrl-C at {moment:.2f} s: no exit within {DEADLINE:g} s")
+        took = time.perf_counter() - t0
+        err = proc.stderr.read()
+        # 0: the signal came as the finished run exited (then its files must be there).
+        assert proc.returncode in (130, 0), f"at {moment:.2f} s: {err}"
+        finished = proc.returncode == 0
+        assert ("interrupted" in err) != finished and "Traceback" not in err, \
+            f"at {moment:.2f} s: {err}"
+        time.sleep(0.3)  # a worker told to stop by its parent's death ends asynchronously
+        assert not _group_alive(proc.pid), f"at {moment:.2f} s: a worker outlived ledsim"
+    finally:
+        if proc.poll() is None or _group_alive(proc.pid):
+            os.killpg(proc.pid, signal.SIGKILL)
+        proc.wait()
+        proc.stderr.close()
+    after = _files(out)
+    # Untouched, or (a signal after the commit) the run's files: same seeds, same traces.
+    complete = set(after) == set(reference) and all(
+        after[n] == reference[n] for n in reference if n.endswith(".npz"))
+    assert complete if finished else (after == before or complete), \
+        f"at {moment:.2f} s: {sorted(after)}"
+    assert [p.name for p in tmp_path.iterdir()] == (["out"] if after else []), \
+        f"at {moment:.2f} s, {took:.2f} s to exit: {sorted(p.name for p in tmp_path.iterdir())}"
