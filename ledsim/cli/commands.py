@@ -50,7 +50,7 @@ def _link(args, distance: bool = True) -> dict:
 
 def simulate(args) -> int:
     from ..config import LinkConstants
-    from ..physics.disturbances import check_timing, parse_disturbance
+    from ..physics.disturbances import check_sea, check_timing, parse_disturbance
     from ..physics.scene import WorldConfig
     from ..physics.sensor import IrradianceSensor
     from ..physics.simulation import simulate, torque_profile
@@ -64,6 +64,7 @@ def simulate(args) -> int:
                              args.torque_frequency)
     disturbances = [parse_disturbance(d) for d in args.disturbance]
     check_timing(disturbances, args.seconds)
+    check_sea(disturbances, args.depth, args.transmitter_depth)
     from ..radiometry.presets import link_constants
 
     args.distance = resolved_distance(args)

@@ -8,7 +8,7 @@ import math
 from ..config import PAPER_DISTANCE, LinkConstants, NavigationNoise
 from ..errors import LedsimError
 from ..keyvalues import settings_of
-from ..physics.disturbances import check_timing, parse_disturbance
+from ..physics.disturbances import check_sea, check_timing, parse_disturbance
 from ..physics.scene import transmitter_rise
 from ..physics.vehicle import StationKeeping
 from ..radiometry.presets import LINK_PRESETS
@@ -113,5 +113,6 @@ def validate_run(cfg) -> None:
             if getattr(d, "needs_receiver", False):
                 raise LedsimError(d.NO_RECEIVER)
     check_timing(disturbances, cfg.run_seconds)
+    check_sea(disturbances, cfg.depth, cfg.transmitter_depth)
     navigation_noise(cfg.imu_noise)
     keeping_gains(cfg.station_keeping_gains)
