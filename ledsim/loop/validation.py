@@ -114,5 +114,11 @@ def validate_run(cfg) -> None:
                 raise LedsimError(d.NO_RECEIVER)
     check_timing(disturbances, cfg.run_seconds)
     check_sea(disturbances, cfg.depth, cfg.transmitter_depth)
+    if cfg.window is not None and cfg.window > cfg.run_seconds:
+        length = "--seconds" if cfg.seconds is not None else \
+            f"the {cfg.scenario} scenario's length; --seconds sets it"
+        raise LedsimError(f"--window {cfg.window:g} is not allowed: it is longer than the "
+                          f"{cfg.run_seconds:g} s run ({length}): must be in (0, "
+                          f"{cfg.run_seconds:g}] s")
     navigation_noise(cfg.imu_noise)
     keeping_gains(cfg.station_keeping_gains)
