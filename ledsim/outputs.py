@@ -3,6 +3,7 @@ appear together, or not at all; and the Ctrl-C flag that stops them being commit
 
 from __future__ import annotations
 
+import contextlib
 import os
 import shutil
 import tempfile
@@ -111,10 +112,12 @@ def output_folder(out: str | Path) -> Iterator[Path]:
     """Yield a private folder to write into; on success its entries move into ``out``.
 
     Everything is written beside ``out`` under a unique temporary name, so an error or
-    an interrupt leaves ``out`` as it was, and two runs to the same ``out`` never share
-    a file. A new ``out`` appears in one rename.
+    an interrupt leaves ``out`` as it was (and removes the folders made to hold it), and
+    two runs to the same ``out`` never share a file. A new ``out`` appears in one
+    rename.
     """
     out = Path(out)
+    made = [p for p in out.absolute().parents if not p.exists()]  # innermost first
     out.parent.mkdir(parents=True, exist_ok=True)
     tmp = Path(tempfile.mkdtemp(dir=out.parent, prefix=f".{out.name}.", suffix=".partial"))
     os.chmod(tmp, 0o777 & ~umask())  # mkdtemp makes 0700
@@ -123,6 +126,9 @@ def output_folder(out: str | Path) -> Iterator[Path]:
         check_interrupt()
     except BaseException:
         shutil.rmtree(tmp, ignore_errors=True)
+        for folder in made:  # and the folders made for it, if still empty
+            with contextlib.suppress(OSError):
+                folder.rmdir()
         raise
     if not out.exists():
         os.replace(tmp, out)

@@ -67,3 +67,26 @@ def test_a_swallowed_interrupt_still_commits_nothing(tmp_path):
     finally:
         INTERRUPTED.clear()
     assert list(tmp_path.iterdir()) == []
+
+
+def test_a_failed_output_folder_takes_away_the_folders_made_for_it(tmp_path):
+    from ledsim.outputs import output_folder
+
+    (tmp_path / "kept").mkdir()
+    with pytest.raises(RuntimeError):
+        with output_folder(tmp_path / "kept" / "new" / "deeper" / "out") as tmp:
+            (tmp / "table.md").write_text("x")
+            raise RuntimeError("the work failed")
+    assert [p.name for p in tmp_path.rglob("*")] == ["kept"]
+
+
+def test_demo_checks_every_estimator_and_its_video_before_it_writes(tmp_path):
+    """A scene the demo cannot use is refused before its first run, with nothing
+    written: not even the folders of --out (the demo used to check each estimator in
+    its output folder, and left that folder's parents behind)."""
+    from conftest import assert_user_error, run_cli
+
+    out = tmp_path / "a" / "b"
+    r = run_cli("demo", "--scene", str(tmp_path / "missing.xml"), "--out", str(out))
+    assert_user_error(r, "missing.xml")
+    assert list(tmp_path.iterdir()) == []
