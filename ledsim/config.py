@@ -25,6 +25,12 @@ if TYPE_CHECKING:  # imported where used: the CLI starts before numpy (thread pi
 #: shipped MuJoCo bank that serves every other.
 PAPER_DISTANCE = 0.085
 
+#: The closest the receiver can come to the LED in the MuJoCo scene [m]: their housings
+#: touch (the LED's 6 mm dome against the photodiodes' lenses, in ``led_link.xml``).
+#: Closer, the scene's geometry has no meaning (and at 1e-183 m its rays divided by
+#: zero); the radiometry alone (``ledsim budget``'s search for its range) goes closer.
+MIN_DISTANCE = 0.01
+
 #: Standard gravity [m/s^2]: the scene's (``led_link.xml``'s default), what an
 #: accelerometer at rest reads, the waves' dispersion and the datasheets' g.
 GRAVITY = 9.81

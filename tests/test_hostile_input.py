@@ -12,6 +12,8 @@ from ledsim.physics.disturbances import DisturbanceError, parse_disturbance
     (["simulate", "--gimbal-angle", "nan"], "--gimbal-angle"),
     (["simulate", "--led-yaw", "nan"], "--led-yaw"),
     (["simulate", "--distance", "1e308"], "--distance"),
+    (["simulate", "--distance", "1e-183"], "--distance"),  # its rays divided by zero
+    (["run", "--distance", "0.005"], "--distance"),
     (["simulate", "--seed", "-1"], "--seed"),
     (["simulate", "--disturbance", "current:speed=1e308"], "current.speed"),
     (["simulate", "--disturbance", "vibration:torque=1e308,force=1e308"], "vibration.torque"),
@@ -75,3 +77,15 @@ def test_a_pickle_with_a_payload_is_refused_in_one_line(tmp_path, protocol):
                 "--out", str(tmp_path / "out"))
     assert_user_error(r, "evil.pt")
     assert not marker.exists() and not (tmp_path / "out").exists()
+
+
+def test_the_scene_needs_room_for_both_housings_but_the_budget_goes_closer():
+    """MIN_DISTANCE binds the MuJoCo scene (and the --distance flag), not the radiometry:
+    ``ledsim budget`` searches for its range below it."""
+    from ledsim.config import MIN_DISTANCE, LinkConstants
+    from ledsim.physics.scene import WorldConfig
+    from ledsim.radiometry.budget import budget_report
+
+    with pytest.raises(ValueError, match="constants.distance"):
+        WorldConfig(constants=LinkConstants(distance=0.5 * MIN_DISTANCE))
+    assert budget_report("luma", attenuation=100.0).range_at_fec_limit_m > 0

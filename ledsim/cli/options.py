@@ -5,6 +5,8 @@ from __future__ import annotations
 import argparse
 import math
 
+from ..config import MIN_DISTANCE
+
 
 def number(lo: float, hi: float, unit: str = "", *, integer: bool = False,
            lo_open: bool = False):
@@ -28,7 +30,7 @@ def number(lo: float, hi: float, unit: str = "", *, integer: bool = False,
     return parse
 
 
-DISTANCE = number(0.0, 500.0, "m", lo_open=True)
+DISTANCE = number(MIN_DISTANCE, 500.0, "m")
 ATTENUATION = number(0.0, 100.0, "1/m")
 BIT_RATE = number(0.0, 1e10, "bit/s", lo_open=True)
 DEPTH = number(1.0, 500.0, "m")

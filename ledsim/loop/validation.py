@@ -5,7 +5,7 @@ from __future__ import annotations
 
 import math
 
-from ..config import PAPER_DISTANCE, LinkConstants, NavigationNoise
+from ..config import MIN_DISTANCE, PAPER_DISTANCE, LinkConstants, NavigationNoise
 from ..errors import LedsimError
 from ..keyvalues import settings_of
 from ..physics.disturbances import check_sea, check_timing, parse_disturbance
@@ -77,7 +77,8 @@ def validate_run(cfg) -> None:
         raise LedsimError("--filter-distance nominal is not allowed with "
                           "--no-supervision: the filters then need the supervisor's "
                           "gain tracker")
-    checks = [("--distance", cfg.distance, cfg.distance > 0, "> 0 m"),
+    checks = [("--distance", cfg.distance, cfg.distance >= MIN_DISTANCE,
+               f">= {MIN_DISTANCE:g} m"),
               ("--torque-limit", cfg.torque_limit, cfg.torque_limit > 0, "> 0 N m"),
               ("--seeds", cfg.seeds, cfg.seeds >= 1, ">= 1"),
               ("--noise-scale", cfg.noise_scale, cfg.noise_scale > 0, "> 0"),
