@@ -89,3 +89,15 @@ def test_the_scene_needs_room_for_both_housings_but_the_budget_goes_closer():
     with pytest.raises(ValueError, match="constants.distance"):
         WorldConfig(constants=LinkConstants(distance=0.5 * MIN_DISTANCE))
     assert budget_report("luma", attenuation=100.0).range_at_fec_limit_m > 0
+
+
+@pytest.mark.parametrize("args,needle", [
+    (["run", "--disturbance", "bogus\nx", "--out", "o"], "unknown disturbance 'bogus\\nx'"),
+    (["run", "--camera\r", "--out", "o"], "--camera\\r"),  # argparse's own message
+    (["budget", "--link", "a\u2028b"], "a\\u2028b"),
+])
+def test_line_breaks_a_user_typed_stay_on_the_one_line_of_the_error(tmp_path, args, needle):
+    """Messages quote what the user typed; its line breaks are shown escaped, so that
+    an error stays one line (found by the CLI fuzz: ``budget -- --link $'\\r0'``)."""
+    r = run_cli(*args, cwd=tmp_path)
+    assert_user_error(r, needle)

@@ -67,6 +67,8 @@ def main(argv: list[str] | None = None) -> int:
 
 
 def _dispatch(commands, args, user_errors: tuple) -> int:
+    from ..errors import one_line
+
     # Results go to stdout; progress bars (tqdm) and diagnostics (logging) to stderr.
     logging.basicConfig(format="ledsim: %(message)s",
                         level=logging.WARNING if args.quiet else logging.INFO)
@@ -74,7 +76,7 @@ def _dispatch(commands, args, user_errors: tuple) -> int:
         code = getattr(commands, args.command)(args)
     except user_errors as exc:
         if not INTERRUPTED.is_set():
-            print(f"ledsim: error: {exc}", file=sys.stderr)
+            print(f"ledsim: error: {one_line(str(exc))}", file=sys.stderr)
             return EXIT_USAGE
     except KeyboardInterrupt:
         INTERRUPTED.set()

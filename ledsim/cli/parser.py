@@ -35,7 +35,9 @@ CAMERAS = ("side", "overview", "chase")  # the shipped scene's cameras
 
 class _Parser(argparse.ArgumentParser):
     def error(self, message):  # one line, no usage dump
-        self.exit(EXIT_USAGE, f"{self.prog}: error: {message}\n")
+        from ..errors import one_line
+
+        self.exit(EXIT_USAGE, f"{self.prog}: error: {one_line(message)}\n")
 
 
 class _Help(argparse.ArgumentDefaultsHelpFormatter):
