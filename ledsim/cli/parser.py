@@ -188,7 +188,8 @@ def build_parser() -> argparse.ArgumentParser:
                          "phidot_hat, p1, p2, torque, lost (SI units, one row per step) "
                          "and what the estimator was given, for ledsim replay")
     rn.add_argument("--window", type=number(0.0, 86_400.0, "s", lo_open=True), default=None,
-                    help="also report the metrics of each window of this length [s] in "
+                    help="also report the metrics of each window of this length [s], at "
+                    "most the run's, in "
                     "results.json (windows: availability, FEC share, the hull's and the "
                     "navigation's horizontal error), e.g. 60 for a long run minute by "
                     "minute")
