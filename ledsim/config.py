@@ -31,6 +31,11 @@ PAPER_DISTANCE = 0.085
 #: zero); the radiometry alone (``ledsim budget``'s search for its range) goes closer.
 MIN_DISTANCE = 0.01
 
+#: The quietest measurement noise a run may ask for, over the nominal (``--noise-scale``)
+#: [-]: a thousandth of the datasheet's. Quieter has no receiver behind it (and at 5e-324
+#: the link's peak SNR divided by zero).
+MIN_NOISE_SCALE = 1e-3
+
 #: Standard gravity [m/s^2]: the scene's (``led_link.xml``'s default), what an
 #: accelerometer at rest reads, the waves' dispersion and the datasheets' g.
 GRAVITY = 9.81

@@ -19,6 +19,7 @@ from ledsim.physics.disturbances import DisturbanceError, parse_disturbance
     (["simulate", "--disturbance", "vibration:torque=1e308,force=1e308"], "vibration.torque"),
     (["simulate", "--disturbance", "occlusion:start=30"], "after the end"),
     (["run", "--noise-scale", "inf"], "--noise-scale"),
+    (["run", "--noise-scale", "5e-324"], "--noise-scale"),  # its peak SNR divided by zero
     (["run", "--estimator", "pf", "--particles", "0"], "--particles"),
     (["run", "--estimator", "pf", "--particles", "10000000000000"], "--particles"),
     (["run", "--seeds", "-1"], "--seeds"),

@@ -5,7 +5,7 @@ from __future__ import annotations
 import argparse
 import math
 
-from ..config import MIN_DISTANCE
+from ..config import MIN_DISTANCE, MIN_NOISE_SCALE
 
 
 def number(lo: float, hi: float, unit: str = "", *, integer: bool = False,
@@ -42,4 +42,4 @@ PARTICLES = number(1, 1_000_000, integer=True)
 WORKERS = number(1, 64, integer=True)
 DPHI_DEG = number(-89.0, 89.0, "deg")
 TORQUE_LIMIT = number(0.0, 10.0, "N m", lo_open=True)
-NOISE_SCALE = number(0.0, 100.0, lo_open=True)
+NOISE_SCALE = number(MIN_NOISE_SCALE, 100.0)

@@ -5,7 +5,13 @@ from __future__ import annotations
 
 import math
 
-from ..config import MIN_DISTANCE, PAPER_DISTANCE, LinkConstants, NavigationNoise
+from ..config import (
+    MIN_DISTANCE,
+    MIN_NOISE_SCALE,
+    PAPER_DISTANCE,
+    LinkConstants,
+    NavigationNoise,
+)
 from ..errors import LedsimError
 from ..keyvalues import settings_of
 from ..physics.disturbances import check_sea, check_timing, parse_disturbance
@@ -81,7 +87,8 @@ def validate_run(cfg) -> None:
                f">= {MIN_DISTANCE:g} m"),
               ("--torque-limit", cfg.torque_limit, cfg.torque_limit > 0, "> 0 N m"),
               ("--seeds", cfg.seeds, cfg.seeds >= 1, ">= 1"),
-              ("--noise-scale", cfg.noise_scale, cfg.noise_scale > 0, "> 0"),
+              ("--noise-scale", cfg.noise_scale, cfg.noise_scale >= MIN_NOISE_SCALE,
+               f">= {MIN_NOISE_SCALE:g}"),
               ("--particles", cfg.particles, cfg.particles >= 1, ">= 1")]
     if cfg.seconds is not None:
         Te = LinkConstants().Te
