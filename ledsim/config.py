@@ -36,6 +36,10 @@ MIN_DISTANCE = 0.01
 #: the link's peak SNR divided by zero).
 MIN_NOISE_SCALE = 1e-3
 
+#: The slowest data a link may carry (``--bit-rate``) [bit/s]: a bit a second. Slower
+#: has no modem behind it (and at 5e-324 bit/s the budget's SNR was infinite).
+MIN_BIT_RATE = 1.0
+
 #: Standard gravity [m/s^2]: the scene's (``led_link.xml``'s default), what an
 #: accelerometer at rest reads, the waves' dispersion and the datasheets' g.
 GRAVITY = 9.81

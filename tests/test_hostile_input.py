@@ -20,6 +20,7 @@ from ledsim.physics.disturbances import DisturbanceError, parse_disturbance
     (["simulate", "--disturbance", "occlusion:start=30"], "after the end"),
     (["run", "--noise-scale", "inf"], "--noise-scale"),
     (["run", "--noise-scale", "5e-324"], "--noise-scale"),  # its peak SNR divided by zero
+    (["run", "--bit-rate", "5e-324"], "--bit-rate"),  # budget's SNR was infinite
     (["run", "--estimator", "pf", "--particles", "0"], "--particles"),
     (["run", "--estimator", "pf", "--particles", "10000000000000"], "--particles"),
     (["run", "--seeds", "-1"], "--seeds"),

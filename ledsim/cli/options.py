@@ -5,7 +5,7 @@ from __future__ import annotations
 import argparse
 import math
 
-from ..config import MIN_DISTANCE, MIN_NOISE_SCALE
+from ..config import MIN_BIT_RATE, MIN_DISTANCE, MIN_NOISE_SCALE
 
 
 def number(lo: float, hi: float, unit: str = "", *, integer: bool = False,
@@ -32,7 +32,7 @@ def number(lo: float, hi: float, unit: str = "", *, integer: bool = False,
 
 DISTANCE = number(MIN_DISTANCE, 500.0, "m")
 ATTENUATION = number(0.0, 100.0, "1/m")
-BIT_RATE = number(0.0, 1e10, "bit/s", lo_open=True)
+BIT_RATE = number(MIN_BIT_RATE, 1e10, "bit/s")
 DEPTH = number(1.0, 500.0, "m")
 TRANSMITTER_DEPTH = number(0.2, 500.0, "m")
 SECONDS = number(0.0, 3600.0, "s", lo_open=True)

@@ -6,6 +6,7 @@ from __future__ import annotations
 import math
 
 from ..config import (
+    MIN_BIT_RATE,
     MIN_DISTANCE,
     MIN_NOISE_SCALE,
     PAPER_DISTANCE,
@@ -104,8 +105,8 @@ def validate_run(cfg) -> None:
         checks.append(("--attenuation", cfg.attenuation, 0 <= cfg.attenuation <= 100,
                        "in [0, 100] 1/m"))
     if cfg.bit_rate is not None:
-        checks.append(("--bit-rate", cfg.bit_rate, 0 < cfg.bit_rate <= 1e10,
-                       "in (0, 1e10] bit/s"))
+        checks.append(("--bit-rate", cfg.bit_rate, MIN_BIT_RATE <= cfg.bit_rate <= 1e10,
+                       f"in [{MIN_BIT_RATE:g}, 1e10] bit/s"))
     checks.append(("--depth", cfg.depth, 1.0 <= cfg.depth <= 500.0, "in [1, 500] m"))
     if cfg.transmitter_depth is not None:
         checks.append(("--transmitter-depth", cfg.transmitter_depth,
