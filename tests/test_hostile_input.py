@@ -103,3 +103,15 @@ def test_line_breaks_a_user_typed_stay_on_the_one_line_of_the_error(tmp_path, ar
     an error stays one line (found by the CLI fuzz: ``budget -- --link $'\\r0'``)."""
     r = run_cli(*args, cwd=tmp_path)
     assert_user_error(r, needle)
+
+
+@pytest.mark.parametrize("flag,needle", [("--torque-limit=--", "'--' is not a number"),
+                                         ("--integrator=--", "invalid choice: '--'")])
+def test_a_double_dash_given_as_a_value_is_that_value(tmp_path, flag, needle):
+    """``--flag=--`` gave the flag an empty list on Python 3.11 (argparse took the "--"
+    for the end of the options), and the run failed on it with a TypeError (found by the
+    CLI fuzz); the value is "--", refused by the flag's own type or choices."""
+    out = tmp_path / "out"
+    r = run_cli("simulate", flag, "--out", str(out))
+    assert_user_error(r, needle)
+    assert not out.exists()

@@ -39,6 +39,16 @@ class _Parser(argparse.ArgumentParser):
 
         self.exit(EXIT_USAGE, f"{self.prog}: error: {one_line(message)}\n")
 
+    def _get_values(self, action, arg_strings):
+        # ``--flag=--``: Python 3.11's argparse drops the "--" as the end of the options
+        # and gives the flag an empty list, which no check expects; it is the value "--"
+        # (as Python 3.13 reads it), refused by the flag's type or choices.
+        if action.option_strings and action.nargs is None and arg_strings == ["--"]:
+            value = self._get_value(action, "--")
+            self._check_value(action, value)
+            return value
+        return super()._get_values(action, arg_strings)
+
 
 class _Help(argparse.ArgumentDefaultsHelpFormatter):
     """Shows defaults, except where there is none to show."""
