@@ -115,3 +115,31 @@ def test_a_double_dash_given_as_a_value_is_that_value(tmp_path, flag, needle):
     r = run_cli("simulate", flag, "--out", str(out))
     assert_user_error(r, needle)
     assert not out.exists()
+
+
+@pytest.mark.parametrize("args,needle", [
+    # the receiver's peak SNR 1e-158: the supervisor's noise prior overflowed
+    (["--link", "luma", "--attenuation", "16"], "leaves the receiver in the dark"),
+    # the LED 3 m under a receiver 1 m deep, the seabed 2.5 m under it: no line of sight,
+    # found in the run's first step
+    (["--link", "luma", "--depth", "1", "--transmitter-depth", "4"], "under the scene's "
+     "seabed 2.5 m below it"),
+])
+def test_a_link_no_run_can_use_is_refused_before_it_starts(tmp_path, args, needle):
+    """Found by the CLI fuzz running for real; both were failures inside the run."""
+    for command in ("run", "sweep"):
+        out = tmp_path / command
+        r = run_cli(command, *args, "--seeds", "1", "--out", str(out))
+        assert_user_error(r, needle)
+        assert not out.exists()
+
+
+def test_a_lost_link_at_twice_its_range_still_runs():
+    """The dark-receiver floor leaves the lost links people study: twice the FEC range
+    in murky water (peak SNR 2e-4) validates."""
+    from ledsim.loop.config import RunConfig
+    from ledsim.loop.registry import MIN_RUN_PEAK_SNR, peak_snr
+
+    cfg = RunConfig(link="luma", attenuation=16.0, distance=2.08, estimator="ekf")
+    cfg.validate()
+    assert MIN_RUN_PEAK_SNR < peak_snr(cfg.world_config().constants, 1.0) < 1e-3

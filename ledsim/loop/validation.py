@@ -3,6 +3,7 @@ physical range, refused in one line naming the value and what is allowed."""
 
 from __future__ import annotations
 
+import functools
 import math
 
 from ..config import (
@@ -16,7 +17,7 @@ from ..config import (
 from ..errors import LedsimError
 from ..keyvalues import settings_of
 from ..physics.disturbances import check_sea, check_timing, parse_disturbance
-from ..physics.scene import transmitter_rise
+from ..physics.scene import WorldConfig, WorldError, transmitter_rise
 from ..physics.vehicle import StationKeeping
 from ..radiometry.presets import LINK_PRESETS
 from ..radiometry.water import WATER_TYPES
@@ -25,8 +26,10 @@ from .registry import (
     FILTER_DISTANCES,
     LOOP_ESTIMATORS,
     MAX_INITIAL_ANGLE,
+    MIN_RUN_PEAK_SNR,
     OMEGA_MODELS,
     PHYSICS_SCENARIOS,
+    peak_snr,
 )
 
 
@@ -131,3 +134,40 @@ def validate_run(cfg) -> None:
                           f"{cfg.run_seconds:g}] s")
     navigation_noise(cfg.imu_noise)
     keeping_gains(cfg.station_keeping_gains)
+    world = cfg.world_config()
+    snr = peak_snr(world.constants, cfg.noise_scale)
+    if not snr >= MIN_RUN_PEAK_SNR:
+        water = "" if cfg.attenuation is None else f" in water of --attenuation " \
+            f"{cfg.attenuation:g}/m"
+        raise LedsimError(f"--link {cfg.link} at --distance {cfg.distance:g} m{water} "
+                          f"leaves the receiver in the dark: its peak SNR is {snr:.3g}, "
+                          f"under {MIN_RUN_PEAK_SNR:g}; a shorter --distance, clearer "
+                          "water or a lower --noise-scale")
+    check_world(world)
+
+
+@functools.lru_cache(maxsize=32)
+def check_world(config: WorldConfig) -> None:
+    """Build the world of ``config`` once and look for the LED from each photodiode: a
+    scene that cannot be built, or an LED that no photodiode can see (behind the
+    receiver, or under the scene's seabed), is refused before any run starts rather
+    than in its first step. Raises :class:`~ledsim.physics.scene.WorldError`."""
+    import mujoco
+
+    from ..physics.sensor import IrradianceSensor
+    from ..physics.world import LinkWorld
+
+    world = LinkWorld(config)
+    try:
+        IrradianceSensor(world, noise=False)
+    except WorldError:
+        bed = mujoco.mj_name2id(world.model, mujoco.mjtObj.mjOBJ_GEOM, "seabed")
+        floor = float(world.model.geom_pos[bed][2]) if bed >= 0 else -math.inf
+        if config.transmitter_depth is None or world.led_pos[2] > floor:
+            raise
+        hull = float(world.initial_hull_pos[2])
+        raise WorldError(f"--transmitter-depth {config.transmitter_depth:g} m puts the LED "
+                         f"{hull - world.led_pos[2]:.3g} m below the receiver at --depth "
+                         f"{config.depth:g} m, under the scene's seabed {hull - floor:g} m "
+                         f"below it: the LED must be less than {hull - floor:g} m deeper "
+                         "than the receiver") from None
