@@ -418,19 +418,19 @@ def test_every_flag_of_every_command_gives_an_exit_code_never_a_traceback(comman
               suppress_health_check=[HealthCheck.too_slow, HealthCheck.data_too_large])
     @given(argv=argv_of(command))
     def fuzz(argv):
-        check(argv, command, files)
+        # argv[0], not ``command``: the inner functions share hypothesis's database key,
+        # so a failure saved for one command is replayed in the others' runs
+        check(argv, argv[0], files)
 
     fuzz()
 
 
-def test_the_fuzz_reaches_every_command_and_flag():
-    """The parser is read, not listed: every command is fuzzed, and every flag of each
-    (but --help) can be drawn."""
-    assert set(EXAMPLES) == set(COMMANDS)
+def test_the_fuzz_reads_every_command_and_the_range_of_every_number():
+    """The parser is read, not listed: the commands are all there (a new one is fuzzed
+    with 20 examples), and every flag with a type is a ``number`` whose range the fuzz
+    reads (``ledsim.cli.options``: finite, in a physical range)."""
+    assert set(EXAMPLES) <= set(COMMANDS)
     for command, parser in COMMANDS.items():
-        flags = {s for a in parser._actions if not isinstance(a, argparse._HelpAction)
-                 for s in a.option_strings}
-        assert "--out" in flags or command in ("replay", "budget"), command
-        ranged = [a for a in parser._actions if a.type is not None
-                  and a.dest not in SPECIAL]
-        assert all(number_bounds(a.type) for a in ranged), [a.dest for a in ranged]
+        ranged = [a.dest for a in parser._actions if a.type is not None
+                  and a.dest not in SPECIAL and number_bounds(a.type) is None]
+        assert not ranged, f"{command}: {ranged} are not ledsim.cli.options.number"
