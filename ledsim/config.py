@@ -25,6 +25,21 @@ if TYPE_CHECKING:  # imported where used: the CLI starts before numpy (thread pi
 #: shipped MuJoCo bank that serves every other.
 PAPER_DISTANCE = 0.085
 
+#: The closest the receiver can come to the LED in the MuJoCo scene [m]: their housings
+#: touch (the LED's 6 mm dome against the photodiodes' lenses, in ``led_link.xml``).
+#: Closer, the scene's geometry has no meaning (and at 1e-183 m its rays divided by
+#: zero); the radiometry alone (``ledsim budget``'s search for its range) goes closer.
+MIN_DISTANCE = 0.01
+
+#: The quietest measurement noise a run may ask for, over the nominal (``--noise-scale``)
+#: [-]: a thousandth of the datasheet's. Quieter has no receiver behind it (and at 5e-324
+#: the link's peak SNR divided by zero).
+MIN_NOISE_SCALE = 1e-3
+
+#: The slowest data a link may carry (``--bit-rate``) [bit/s]: a bit a second. Slower
+#: has no modem behind it (and at 5e-324 bit/s the budget's SNR was infinite).
+MIN_BIT_RATE = 1.0
+
 #: Standard gravity [m/s^2]: the scene's (``led_link.xml``'s default), what an
 #: accelerometer at rest reads, the waves' dispersion and the datasheets' g.
 GRAVITY = 9.81

@@ -12,6 +12,17 @@ class LedsimError(ValueError):
     """Bad user input or an unusable file, reported by the CLI as one line, exit code 2."""
 
 
+#: What ``str.splitlines`` breaks a line at: a user's text may bring any of them into a
+#: message (``--link $'a\rb'``).
+LINE_BREAKS = "\n\r\x0b\x0c\x1c\x1d\x1e\x85\u2028\u2029"
+_ESCAPED = {ord(c): repr(c)[1:-1] for c in LINE_BREAKS}
+
+
+def one_line(message: str) -> str:
+    """``message`` as one line: the line breaks in it shown escaped (``\\n``)."""
+    return message.translate(_ESCAPED)
+
+
 #: Former name, kept so older scripts keep working.
 UserError = LedsimError
 

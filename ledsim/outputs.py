@@ -3,6 +3,7 @@ appear together, or not at all; and the Ctrl-C flag that stops them being commit
 
 from __future__ import annotations
 
+import contextlib
 import os
 import shutil
 import signal
@@ -176,11 +177,13 @@ def output_folder(out: str | Path) -> Iterator[Path]:
     """Yield a private folder to write into; on success its entries move into ``out``.
 
     Everything is written beside ``out`` under a unique temporary name, so an error or
-    an interrupt leaves ``out`` as it was, and two runs to the same ``out`` never share
-    a file. A new ``out`` appears in one rename; into an existing ``out`` the entries
-    move one by one, with Ctrl-C held back until the last (:func:`deferred_sigint`).
+    an interrupt leaves ``out`` as it was (and removes the folders made to hold it), and
+    two runs to the same ``out`` never share a file. A new ``out`` appears in one rename;
+    into an existing ``out`` the entries move one by one, with Ctrl-C held back until the
+    last (:func:`deferred_sigint`).
     """
     out = Path(out)
+    made = [p for p in out.absolute().parents if not p.exists()]  # innermost first
     out.parent.mkdir(parents=True, exist_ok=True)
     with deferred_sigint():  # no temporary made but not known
         tmp = Path(tempfile.mkdtemp(dir=out.parent, prefix=f".{out.name}.", suffix=".partial"))
@@ -193,6 +196,9 @@ def output_folder(out: str | Path) -> Iterator[Path]:
             _move_into(tmp, out)
     except BaseException:
         shutil.rmtree(tmp, ignore_errors=True)
+        for folder in made:  # and the folders made for it, if still empty
+            with contextlib.suppress(OSError):
+                folder.rmdir()
         raise
     finally:
         _TEMPORARIES.discard(tmp)

@@ -267,3 +267,26 @@ def test_ctrl_c_ends_a_run_with_workers_within_2_s_at_any_moment(tmp_path, finis
         f"at {moment:.2f} s: {sorted(after)}"
     assert [p.name for p in tmp_path.iterdir()] == (["out"] if after else []), \
         f"at {moment:.2f} s, {took:.2f} s to exit: {sorted(p.name for p in tmp_path.iterdir())}"
+
+
+def test_a_failed_output_folder_takes_away_the_folders_made_for_it(tmp_path):
+    from ledsim.outputs import output_folder
+
+    (tmp_path / "kept").mkdir()
+    with pytest.raises(RuntimeError):
+        with output_folder(tmp_path / "kept" / "new" / "deeper" / "out") as tmp:
+            (tmp / "table.md").write_text("x")
+            raise RuntimeError("the work failed")
+    assert [p.name for p in tmp_path.rglob("*")] == ["kept"]
+
+
+def test_demo_checks_every_estimator_and_its_video_before_it_writes(tmp_path):
+    """A scene the demo cannot use is refused before its first run, with nothing
+    written: not even the folders of --out (the demo used to check each estimator in
+    its output folder, and left that folder's parents behind)."""
+    from conftest import assert_user_error, run_cli
+
+    out = tmp_path / "a" / "b"
+    r = run_cli("demo", "--scene", str(tmp_path / "missing.xml"), "--out", str(out))
+    assert_user_error(r, "missing.xml")
+    assert list(tmp_path.iterdir()) == []

@@ -114,6 +114,23 @@ def test_cli_defects_are_one_line_refusals(tmp_path, args, needle):
     assert not out.exists()
 
 
+@pytest.mark.parametrize("args,needle", [
+    (["--seconds", "10", "--window", "100"], "--window 100 is not allowed: it is longer "
+     "than the 10 s run (--seconds)"),
+    (["--window", "10.5"], "the align scenario's length"),
+])
+def test_a_window_longer_than_the_run_is_refused(tmp_path, args, needle):
+    out = tmp_path / "o"
+    r = run_cli("run", "--seeds", "1", "--no-plot", *args, "--out", str(out))
+    assert_user_error(r, needle)
+    assert not out.exists()
+
+
+def test_a_window_as_long_as_the_run_is_allowed():
+    RunConfig(seconds=10.0, window=10.0).validate()
+    RunConfig(window=10.0).validate()  # the align scenario's 10 s
+
+
 def test_a_repeated_key_is_refused_in_the_library_too():
     with pytest.raises(DisturbanceError, match="twice"):
         parse_disturbance("kick:rate=2,rate=3")

@@ -20,8 +20,8 @@ PARSER = build_parser()
 #: ``scripts/soak.py`` multiplies the examples; TRIED counts them per test.
 SOAK = int(os.environ.get("LEDSIM_SOAK", "1"))
 TRIED: Counter = Counter()
-FLOAT_FLAGS = [("run", "--distance", (0, 500)), ("run", "--attenuation", (0, 100)),
-               ("run", "--noise-scale", (0, 100)),
+FLOAT_FLAGS = [("run", "--distance", (0.01, 500)), ("run", "--attenuation", (0, 100)),
+               ("run", "--noise-scale", (0.001, 100)),
                ("run", "--torque-limit", (0, 10)), ("run", "--seconds", (0, 3600)),
                ("simulate", "--gimbal-angle", (-math.pi, math.pi)),
                ("simulate", "--torque-frequency", (0, 50)),

@@ -2,6 +2,7 @@
 of the vehicles, and the light around the receiver (flicker, scintillation)."""
 
 import math
+import re
 
 import numpy as np
 import pytest
@@ -80,6 +81,99 @@ def test_the_bench_keeps_its_uniform_wave_flow_and_a_physical_link_gets_strips()
 def test_bad_wave_keys_are_refused(text):
     with pytest.raises(DisturbanceError):
         parse_disturbance(text)
+
+
+@pytest.mark.parametrize("spec,needle", [
+    ("waves:height=20,period=3", "H/L = 1.42 > 1/7 (L = 14.1 m)"),
+    ("waves:height=2.1,period=3", "the height is at most 2.01 m"),
+    ("waves:height=10,period=12,sea_depth=12", "Miche's limit over sea_depth=12 m"),
+])
+def test_a_wave_steeper_than_it_can_stand_is_refused(spec, needle):
+    """H/L at most 1/7 in deep water (L from the dispersion relation), Miche's
+    tanh(k h)/7 over a finite sea; one line naming the value, L and the limit."""
+    with pytest.raises(DisturbanceError) as exc:
+        parse_disturbance(spec)
+    assert needle in str(exc.value) and "\n" not in str(exc.value)
+
+
+def test_the_steepest_wave_that_stands_is_accepted():
+    from ledsim.physics.water import BREAKING_STEEPNESS
+
+    for sea in (0.0, 12.0, 200.0):
+        wave = parse_disturbance(f"waves:period=5,sea_depth={sea:g}").wave
+        limit = BREAKING_STEEPNESS * (math.tanh(wave.k * sea) if sea else 1.0)
+        height = 0.999 * limit * wave.wavelength
+        assert parse_disturbance(f"waves:height={height!r},period=5,sea_depth={sea:g}")
+        assert limit <= BREAKING_STEEPNESS
+
+
+@pytest.mark.parametrize("settings,needle", [
+    (dict(depth=3.0, disturbances=("waves:height=10",)), "too near the vehicle at --depth 3 m"),
+    (dict(depth=3.0, disturbances=("waves:height=5.8",)), "at most 5.7 m"),
+    (dict(disturbances=("waves:height=4,depth=2",)), "vehicle at waves.depth=2 m"),
+    (dict(link="luma", distance=20.0, depth=3.0, transmitter_depth=1.0,
+          disturbances=("waves:height=2",)), "too near the LED at 1 m"),
+    (dict(link="luma", distance=20.0, depth=3.0, transmitter_depth=5.0,
+          disturbances=("waves:sea_depth=4.5",)), "deeper than the LED's 5 m"),
+])
+def test_a_trough_below_the_vehicle_or_the_led_is_refused_up_front(settings, needle):
+    from ledsim.errors import LedsimError
+    from ledsim.loop.config import RunConfig
+
+    with pytest.raises(LedsimError, match=re.escape(needle)):
+        RunConfig(estimator="ekf", seconds=1.0, **settings).validate()
+
+
+def test_a_trough_that_passes_over_both_vehicles_is_accepted():
+    from ledsim.loop.config import RunConfig
+
+    RunConfig(estimator="ekf", seconds=1.0, depth=3.0,
+              disturbances=("waves:height=5.7,period=12",)).validate()
+    RunConfig(estimator="ekf", link="luma", distance=20.0, depth=3.0, transmitter_depth=1.0,
+              disturbances=("waves:height=1.9,period=8",)).validate()
+
+
+def test_the_clearances_are_the_tops_of_the_hull_and_the_led_in_the_scene():
+    """HULL_CLEARANCE and LED_CLEARANCE cover the highest point of the receiver vehicle
+    (hull, fin, mast, gimbal) and of the LED's housing (not its mast, which hangs below)
+    above their centres in the shipped scene, and by no more than a centimetre and a
+    half."""
+    import mujoco
+
+    from ledsim.physics.water import HULL_CLEARANCE, LED_CLEARANCE
+
+    world = LinkWorld(WorldConfig())
+    m, d = world.model, world.data
+    mujoco.mj_forward(m, d)
+
+    def top(*bodies):
+        ids = [m.body(b).id for b in bodies]
+        tops = []
+        for g in range(m.ngeom):
+            if m.geom_bodyid[g] in ids:
+                r = d.geom_xmat[g].reshape(3, 3)[2]
+                tops.append(d.geom_xpos[g, 2] + r @ m.geom_aabb[g, :3]
+                            + np.abs(r) @ m.geom_aabb[g, 3:])
+        return max(tops)
+
+    hull = top("auv", "gimbal") - d.xpos[m.body("auv").id][2]
+    led = top("transmitter") - d.site_xpos[m.site("led").id][2]
+    assert hull <= HULL_CLEARANCE < hull + 0.015
+    assert led <= LED_CLEARANCE < led + 0.015
+
+
+@pytest.mark.parametrize("command,args", [
+    ("run", ["--depth", "3", "--disturbance", "waves:height=10"]),
+    ("simulate", ["--depth", "3", "--disturbance", "waves:height=10"]),
+    ("run", ["--disturbance", "waves:height=20,period=3"]),
+])
+def test_impossible_seas_exit_2_in_one_line_before_any_work(tmp_path, command, args):
+    from conftest import assert_user_error, run_cli
+
+    out = tmp_path / "o"
+    r = run_cli(command, *args, "--out", str(out))
+    assert_user_error(r, "waves: height=")
+    assert not out.exists()
 
 
 def test_depths_place_the_led_above_the_receiver_at_the_same_slant_distance():
@@ -222,3 +316,18 @@ def test_the_run_reports_its_depths():
     summary = to_jsonable(run_many(cfg, progress=False)[0])
     assert (summary["depth"], summary["transmitter_depth"], summary["receiver_dome"]) == \
         (3.0, 2.5, True)
+
+
+def test_the_env_and_the_sweep_refuse_an_impossible_sea(tmp_path):
+    from ledsim.envs.link_align import LinkAlignEnv
+    from ledsim.loop.config import RunConfig
+    from ledsim.loop.sweep import SweepGrid
+
+    with pytest.raises(DisturbanceError, match="steeper than a wave can stand"):
+        LinkAlignEnv(disturbances=("waves:height=20,period=3",))
+    with pytest.raises(DisturbanceError, match="too near the vehicle at --depth 2 m"):
+        LinkAlignEnv(depth=2.0, disturbances=("waves:height=4",))
+    grid = SweepGrid(["ekf"], ["none", "current+waves:height=4"], [0.085], [1.0], 1,
+                     RunConfig(seconds=1.0, depth=2.0))
+    with pytest.raises(DisturbanceError, match="too near the vehicle"):
+        grid.validate()

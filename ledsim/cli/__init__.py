@@ -201,6 +201,7 @@ def _main(argv: list[str]) -> int:
 def _dispatch(commands, args, user_errors: tuple) -> int:
     import logging
 
+    from ..errors import one_line
     from ..outputs import INTERRUPTED
     from .parser import EXIT_USAGE
 
@@ -213,5 +214,5 @@ def _dispatch(commands, args, user_errors: tuple) -> int:
     except user_errors as exc:
         if INTERRUPTED.is_set():  # the error came from the interrupt
             raise KeyboardInterrupt from None
-        print(f"ledsim: error: {exc}", file=sys.stderr)
+        print(f"ledsim: error: {one_line(str(exc))}", file=sys.stderr)
         return EXIT_USAGE

@@ -50,7 +50,7 @@ def _link(args, distance: bool = True) -> dict:
 
 def simulate(args) -> int:
     from ..config import LinkConstants
-    from ..physics.disturbances import check_timing, parse_disturbance
+    from ..physics.disturbances import check_sea, check_timing, parse_disturbance
     from ..physics.scene import WorldConfig
     from ..physics.sensor import IrradianceSensor
     from ..physics.simulation import simulate, torque_profile
@@ -64,6 +64,7 @@ def simulate(args) -> int:
                              args.torque_frequency)
     disturbances = [parse_disturbance(d) for d in args.disturbance]
     check_timing(disturbances, args.seconds)
+    check_sea(disturbances, args.depth, args.transmitter_depth)
     from ..radiometry.presets import link_constants
 
     args.distance = resolved_distance(args)
@@ -122,23 +123,28 @@ def run(args) -> int:
 def demo(args) -> int:
     """Align the receiver from 0.3 rad off with each estimator; print one table."""
     from ..loop.config import COMPARED_ESTIMATORS, RunConfig
+    from ..loop.estimation import check_checkpoint
     from ..loop.report import run_many, write_run
     from ..loop.table import TABLE_HEADER, format_summary
+    from ..loop.video import VideoSpec, check_video
     from ..outputs import atomic_write_text
     from ..results import write_json
 
     out = check_out_dir(args.out)
     t0 = time.perf_counter()
     rows, summaries = [], []
+    # Every estimator's run and the video are checked before the first one starts.
+    cfgs = [RunConfig(scenario="align", estimator=est, seeds=args.seeds, scene=args.scene,
+                      **_vehicle(args), **_link(args)) for est in COMPARED_ESTIMATORS]
+    for cfg in cfgs:
+        cfg.validate()
+        check_checkpoint(cfg)
+    _check_vehicle(cfgs[0])
+    if not args.no_video:
+        check_video(_demo_video_config(args.scene, _vehicle(args)), VideoSpec())
+    _warn_saturated(cfgs[0])
     with output_folder(out) as tmp:
-        link = _link(args)
-        for est in COMPARED_ESTIMATORS:
-            cfg = RunConfig(scenario="align", estimator=est, seeds=args.seeds,
-                            scene=args.scene, **_vehicle(args), **link)
-            cfg.validate()
-            if est == COMPARED_ESTIMATORS[0]:
-                _check_vehicle(cfg)
-                _warn_saturated(cfg)
+        for est, cfg in zip(COMPARED_ESTIMATORS, cfgs, strict=True):
             summary, trace = run_many(cfg, progress=not args.quiet)
             write_run(summary, trace, tmp / est)
             summaries.append(summary)
@@ -155,16 +161,24 @@ def demo(args) -> int:
     return 0
 
 
+def _demo_video_config(scene: str | None, vehicle: dict, link: dict | None = None,
+                       estimator: str = "kkl"):
+    """The run of the demo's video: 5 s of the ``estimator``-driven alignment with an
+    occlusion (on ``link``: default the paper's bench, whose 8.5 cm the cameras frame)."""
+    from ..loop.config import RunConfig
+
+    return RunConfig(scenario="align", estimator=estimator, seconds=5.0, scene=scene,
+                     disturbances=("occlusion:start=3,duration=0.5",), **vehicle,
+                     **(link or {"link": "paper"}))
+
+
 def _demo_video(out: Path, scene: str | None, progress: bool, vehicle: dict,
                 link: dict | None = None, estimator: str = "kkl") -> None:
     """A short video of the ``estimator``-driven alignment with an occlusion, and a still
-    frame (on ``link``: default the paper's bench, whose 8.5 cm the cameras frame)."""
-    from ..loop.config import RunConfig
+    frame (:func:`_demo_video_config`)."""
     from ..loop.video import VideoSpec, check_video, render_video
 
-    cfg = RunConfig(scenario="align", estimator=estimator, seconds=5.0, scene=scene,
-                    disturbances=("occlusion:start=3,duration=0.5",), **vehicle,
-                    **(link or {"link": "paper"}))
+    cfg = _demo_video_config(scene, vehicle, link, estimator)
     check_video(cfg, VideoSpec())
     frames = render_video(cfg, 0, out / "alignment.mp4", VideoSpec(),
                           still=out / "alignment.png", progress=progress)

@@ -5,6 +5,8 @@ from __future__ import annotations
 import argparse
 import math
 
+from ..config import MIN_BIT_RATE, MIN_DISTANCE, MIN_NOISE_SCALE
+
 
 def number(lo: float, hi: float, unit: str = "", *, integer: bool = False,
            lo_open: bool = False):
@@ -28,9 +30,9 @@ def number(lo: float, hi: float, unit: str = "", *, integer: bool = False,
     return parse
 
 
-DISTANCE = number(0.0, 500.0, "m", lo_open=True)
+DISTANCE = number(MIN_DISTANCE, 500.0, "m")
 ATTENUATION = number(0.0, 100.0, "1/m")
-BIT_RATE = number(0.0, 1e10, "bit/s", lo_open=True)
+BIT_RATE = number(MIN_BIT_RATE, 1e10, "bit/s")
 DEPTH = number(1.0, 500.0, "m")
 TRANSMITTER_DEPTH = number(0.2, 500.0, "m")
 SECONDS = number(0.0, 3600.0, "s", lo_open=True)
@@ -40,4 +42,4 @@ PARTICLES = number(1, 1_000_000, integer=True)
 WORKERS = number(1, 64, integer=True)
 DPHI_DEG = number(-89.0, 89.0, "deg")
 TORQUE_LIMIT = number(0.0, 10.0, "N m", lo_open=True)
-NOISE_SCALE = number(0.0, 100.0, lo_open=True)
+NOISE_SCALE = number(MIN_NOISE_SCALE, 100.0)

@@ -35,7 +35,19 @@ CAMERAS = ("side", "overview", "chase")  # the shipped scene's cameras
 
 class _Parser(argparse.ArgumentParser):
     def error(self, message):  # one line, no usage dump
-        self.exit(EXIT_USAGE, f"{self.prog}: error: {message}\n")
+        from ..errors import one_line
+
+        self.exit(EXIT_USAGE, f"{self.prog}: error: {one_line(message)}\n")
+
+    def _get_values(self, action, arg_strings):
+        # ``--flag=--``: Python 3.11's argparse drops the "--" as the end of the options
+        # and gives the flag an empty list, which no check expects; it is the value "--"
+        # (as Python 3.13 reads it), refused by the flag's type or choices.
+        if action.option_strings and action.nargs is None and arg_strings == ["--"]:
+            value = self._get_value(action, "--")
+            self._check_value(action, value)
+            return value
+        return super()._get_values(action, arg_strings)
 
 
 class _Help(argparse.ArgumentDefaultsHelpFormatter):
@@ -187,7 +199,8 @@ def build_parser() -> argparse.ArgumentParser:
                          "phidot_hat, p1, p2, torque, lost (SI units, one row per step) "
                          "and what the estimator was given, for ledsim replay")
     rn.add_argument("--window", type=number(0.0, 86_400.0, "s", lo_open=True), default=None,
-                    help="also report the metrics of each window of this length [s] in "
+                    help="also report the metrics of each window of this length [s], at "
+                    "most the run's, in "
                     "results.json (windows: availability, FEC share, the hull's and the "
                     "navigation's horizontal error), e.g. 60 for a long run minute by "
                     "minute")

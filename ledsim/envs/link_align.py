@@ -59,7 +59,7 @@ import numpy as np
 from gymnasium import spaces
 from gymnasium.utils import EzPickle
 
-from ..config import LinkConstants
+from ..config import MIN_DISTANCE, LinkConstants
 from ..control import receiver_peak
 from ..loop.closed_loop import start_world
 from ..loop.config import MAX_INITIAL_ANGLE, EstimatorPart, RunConfig, TaskPart, WorldPart
@@ -74,9 +74,6 @@ from ..radiometry.presets import link_constants
 #: DVL x, y [m/s], encoder [rad], LOS rate [rad/s].
 VEHICLE_BOUND = np.array([60.0, 5.0, 5.0, math.pi, 100.0])
 
-#: The closest the receiver can come to the LED [m] (their housings touch): the
-#: observation space's upper bound is the power there.
-MIN_DISTANCE = 0.01
 
 
 
@@ -185,6 +182,7 @@ class LinkAlignEnv(gym.Env, EzPickle):
         self.peak_response = receiver_peak(c)
         self.measurement_noise = run_noise(self.cfg, self.system)
         margin = IMPOSSIBLE_SIGMAS * self.measurement_noise.std
+        # the observation space's upper bound: the power where the housings touch
         closest = float(achievable_power(MIN_DISTANCE, 0.0, c, self.peak_response))
         self.render_mode = render_mode
         self.metadata = {**self.metadata, "render_fps": int(round(1.0 / self.dt))}

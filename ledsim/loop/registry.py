@@ -55,6 +55,12 @@ MAX_INITIAL_ANGLE = 1.4
 #: 0.25 m (3.7; 0.855 against 0.729, 0.962 against 0.840) [-].
 MIN_FAST_PEAK_SNR = 3.5
 
+#: Below this peak signal-to-noise ratio a run is refused: the receiver is in the dark,
+#: its best sample a millionth of the noise (``luma`` at 30 m in water of c = 16/m has
+#: 1e-158, and the supervisor's noise prior overflowed). Links lost at twice their FEC
+#: range keep 2e-4 or more (``docs/link_table.md``'s presets, c up to 16/m) [-].
+MIN_RUN_PEAK_SNR = 1e-6
+
 
 @functools.lru_cache(maxsize=64)
 def peak_snr(constants: LinkConstants, noise_scale: float) -> float:

@@ -3,15 +3,23 @@ physical range, refused in one line naming the value and what is allowed."""
 
 from __future__ import annotations
 
+import functools
 import math
 import types
 import typing
 
-from ..config import PAPER_DISTANCE, LinkConstants, NavigationNoise
+from ..config import (
+    MIN_BIT_RATE,
+    MIN_DISTANCE,
+    MIN_NOISE_SCALE,
+    PAPER_DISTANCE,
+    LinkConstants,
+    NavigationNoise,
+)
 from ..errors import LedsimError
 from ..keyvalues import settings_of
-from ..physics.disturbances import check_timing, parse_disturbance
-from ..physics.scene import transmitter_rise
+from ..physics.disturbances import check_sea, check_timing, parse_disturbance
+from ..physics.scene import WorldConfig, WorldError, transmitter_rise
 from ..physics.vehicle import StationKeeping
 from ..radiometry.presets import LINK_PRESETS
 from ..radiometry.water import WATER_TYPES
@@ -20,8 +28,10 @@ from .registry import (
     FILTER_DISTANCES,
     LOOP_ESTIMATORS,
     MAX_INITIAL_ANGLE,
+    MIN_RUN_PEAK_SNR,
     OMEGA_MODELS,
     PHYSICS_SCENARIOS,
+    peak_snr,
 )
 
 
@@ -79,10 +89,12 @@ def validate_run(cfg) -> None:
         raise LedsimError("--filter-distance nominal is not allowed with "
                           "--no-supervision: the filters then need the supervisor's "
                           "gain tracker")
-    checks = [("--distance", cfg.distance, cfg.distance > 0, "> 0 m"),
+    checks = [("--distance", cfg.distance, cfg.distance >= MIN_DISTANCE,
+               f">= {MIN_DISTANCE:g} m"),
               ("--torque-limit", cfg.torque_limit, cfg.torque_limit > 0, "> 0 N m"),
               ("--seeds", cfg.seeds, cfg.seeds >= 1, ">= 1"),
-              ("--noise-scale", cfg.noise_scale, cfg.noise_scale > 0, "> 0"),
+              ("--noise-scale", cfg.noise_scale, cfg.noise_scale >= MIN_NOISE_SCALE,
+               f">= {MIN_NOISE_SCALE:g}"),
               ("--particles", cfg.particles, cfg.particles >= 1, ">= 1")]
     if cfg.seconds is not None:
         Te = LinkConstants().Te
@@ -98,8 +110,8 @@ def validate_run(cfg) -> None:
         checks.append(("--attenuation", cfg.attenuation, 0 <= cfg.attenuation <= 100,
                        "in [0, 100] 1/m"))
     if cfg.bit_rate is not None:
-        checks.append(("--bit-rate", cfg.bit_rate, 0 < cfg.bit_rate <= 1e10,
-                       "in (0, 1e10] bit/s"))
+        checks.append(("--bit-rate", cfg.bit_rate, MIN_BIT_RATE <= cfg.bit_rate <= 1e10,
+                       f"in [{MIN_BIT_RATE:g}, 1e10] bit/s"))
     checks.append(("--depth", cfg.depth, 1.0 <= cfg.depth <= 500.0, "in [1, 500] m"))
     if cfg.transmitter_depth is not None:
         checks.append(("--transmitter-depth", cfg.transmitter_depth,
@@ -115,8 +127,52 @@ def validate_run(cfg) -> None:
             if getattr(d, "needs_receiver", False):
                 raise LedsimError(d.NO_RECEIVER)
     check_timing(disturbances, cfg.run_seconds)
+    check_sea(disturbances, cfg.depth, cfg.transmitter_depth)
+    if cfg.window is not None and cfg.window > cfg.run_seconds:
+        length = "--seconds" if cfg.seconds is not None else \
+            f"the {cfg.scenario} scenario's length; --seconds sets it"
+        raise LedsimError(f"--window {cfg.window:g} is not allowed: it is longer than the "
+                          f"{cfg.run_seconds:g} s run ({length}): must be in (0, "
+                          f"{cfg.run_seconds:g}] s")
     navigation_noise(cfg.imu_noise)
     keeping_gains(cfg.station_keeping_gains)
+    world = cfg.world_config()
+    snr = peak_snr(world.constants, cfg.noise_scale)
+    if not snr >= MIN_RUN_PEAK_SNR:
+        water = "" if cfg.attenuation is None else f" in water of --attenuation " \
+            f"{cfg.attenuation:g}/m"
+        raise LedsimError(f"--link {cfg.link} at --distance {cfg.distance:g} m{water} "
+                          f"leaves the receiver in the dark: its peak SNR is {snr:.3g}, "
+                          f"under {MIN_RUN_PEAK_SNR:g}; a shorter --distance, clearer "
+                          "water or a lower --noise-scale")
+    check_world(world)
+
+
+@functools.lru_cache(maxsize=32)
+def check_world(config: WorldConfig) -> None:
+    """Build the world of ``config`` once and look for the LED from each photodiode: a
+    scene that cannot be built, or an LED that no photodiode can see (behind the
+    receiver, or under the scene's seabed), is refused before any run starts rather
+    than in its first step. Raises :class:`~ledsim.physics.scene.WorldError`."""
+    import mujoco
+
+    from ..physics.sensor import IrradianceSensor
+    from ..physics.world import LinkWorld
+
+    world = LinkWorld(config)
+    try:
+        IrradianceSensor(world, noise=False)
+    except WorldError:
+        bed = mujoco.mj_name2id(world.model, mujoco.mjtObj.mjOBJ_GEOM, "seabed")
+        floor = float(world.model.geom_pos[bed][2]) if bed >= 0 else -math.inf
+        if config.transmitter_depth is None or world.led_pos[2] > floor:
+            raise
+        hull = float(world.initial_hull_pos[2])
+        raise WorldError(f"--transmitter-depth {config.transmitter_depth:g} m puts the LED "
+                         f"{hull - world.led_pos[2]:.3g} m below the receiver at --depth "
+                         f"{config.depth:g} m, under the scene's seabed {hull - floor:g} m "
+                         f"below it: the LED must be less than {hull - floor:g} m deeper "
+                         "than the receiver") from None
 
 
 def run_from_dict(cls, saved: dict):

@@ -14,7 +14,7 @@ import numpy as np
 
 from observer.metrics import converged, mean_and_spread, rmse
 
-from ..config import LinkConstants
+from ..config import MIN_DISTANCE, LinkConstants
 from ..errors import LedsimError
 from ..estimators import build_estimator
 from ..montecarlo import run_jobs
@@ -56,7 +56,8 @@ class EvaluationConfig:
 
     def validate(self) -> None:
         get_scenario(self.scenario)
-        checks = [("--distance", self.distance, self.distance > 0, "> 0 m"),
+        checks = [("--distance", self.distance, self.distance >= MIN_DISTANCE,
+                   f">= {MIN_DISTANCE:g} m"),
                   ("--seeds", self.seeds, self.seeds >= 1, ">= 1"),
                   ("--starts", self.starts, self.starts >= 0, ">= 0"),
                   ("--particles", self.particles, self.particles >= 1, ">= 1")]

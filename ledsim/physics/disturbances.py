@@ -257,3 +257,12 @@ def check_timing(disturbances, seconds: float) -> None:
         if start is not None and start >= seconds:
             raise DisturbanceError(f"{type(d).__name__.lower()} starts at {start:g} s, at or "
                                    f"after the end of the {seconds:g} s run")
+
+
+def check_sea(disturbances, depth: float, transmitter_depth: float | None = None) -> None:
+    """Refuse waves the run's vehicles cannot be in (:meth:`Waves.check_sea`): their
+    trough must pass over the receiver at ``depth`` [m] and the LED at
+    ``transmitter_depth`` [m] (None: the receiver's), with room for their size."""
+    for d in disturbances:
+        if isinstance(d, Waves):
+            d.check_sea(depth, transmitter_depth)

@@ -15,7 +15,7 @@ from pathlib import Path
 import mujoco
 import numpy as np
 
-from ..config import ConfigError, LinkConstants
+from ..config import MIN_DISTANCE, ConfigError, LinkConstants
 from ..errors import LedsimError
 from ..resources import scene_path
 from .scene_ids import (  # noqa: F401 (re-exported)
@@ -116,6 +116,9 @@ class WorldConfig:
             ("metacentric_height", self.metacentric_height, self.metacentric_height >= 0,
              ">= 0 m"),
             ("depth", self.depth, 1.0 <= self.depth <= 500.0, "in [1, 500] m"),
+            ("constants.distance", self.constants.distance,
+             self.constants.distance >= MIN_DISTANCE,
+             f">= {MIN_DISTANCE:g} m (closer, the LED's and the receiver's housings touch)"),
         ]
         if self.transmitter_depth is not None:
             checks.append(("transmitter_depth", self.transmitter_depth,

@@ -19,6 +19,19 @@ from .scene import DEFAULT_DEPTH
 from .strips import HullStrips, StripCoefficients
 from .world import LinkWorld
 
+#: The steepest a wave can stand in deep water, H/L (Michell 1893): steeper, its crest
+#: breaks. Over a sea of finite depth h the limit is Miche's (1944), (1/7) tanh(k h),
+#: lower, which becomes this one as h grows.
+BREAKING_STEEPNESS = 1.0 / 7.0
+#: How far above the receiver vehicle's centre a wave's trough must stay [m]: the top of
+#: its hull in the shipped scene (``led_link.xml``: the mast antenna reaches 0.15 m above
+#: the hull's axis, the vertical fin 0.13 m, the hull itself 0.095 m), so that even the
+#: trough passes over the whole vehicle.
+HULL_CLEARANCE = 0.15
+#: How far above the LED's centre a trough must stay [m]: the top of its housing (a
+#: 16 mm radius in ``led_link.xml``), rounded up.
+LED_CLEARANCE = 0.02
+
 
 @dataclass
 class WaterCurrent(SeededDisturbance):
@@ -79,6 +92,10 @@ class Waves(Disturbance):
       ``heading``, sin(w t) up). The hull's drag turns it into sway and yaw; it cannot
       pitch the hull.
 
+    Only a sea that can exist is built: a wave no steeper than it can stand
+    (:meth:`breaking_steepness`), and, against a run's depths (:meth:`check_sea`), a
+    trough that passes over the receiver vehicle and the LED.
+
     Attributes:
         height: wave height H, crest to trough [m].
         period: wave period T [s].
@@ -106,13 +123,75 @@ class Waves(Disturbance):
     def __post_init__(self):
         if self.depth is not None:
             self._check_sea_depth(self.depth)
+        self._check_steepness()
         self._strips: HullStrips | None = None
+        self._checked: tuple | None = None  # the depths check_sea last passed
 
-    def _check_sea_depth(self, depth: float) -> None:
+    def _check_sea_depth(self, depth: float, what: str = "the vehicle's") -> None:
         if self.sea_depth and self.sea_depth <= depth:
             raise DisturbanceError(f"waves.sea_depth={self.sea_depth:g} is not allowed: "
-                                   f"must be 0 (deep) or deeper than the vehicle's "
+                                   f"must be 0 (deep) or deeper than {what} "
                                    f"{depth:g} m")
+
+    def breaking_steepness(self) -> float:
+        """The steepest H/L this wave's period and sea can carry [-]:
+        :data:`BREAKING_STEEPNESS` in deep water, Miche's (1/7) tanh(k h) over a sea
+        ``sea_depth`` h [m] deep."""
+        if not self.sea_depth:
+            return BREAKING_STEEPNESS
+        return BREAKING_STEEPNESS * math.tanh(self.wave.k * self.sea_depth)
+
+    def _check_steepness(self) -> None:
+        """Refuse a wave steeper than it can stand (H/L over :meth:`breaking_steepness`,
+        L from the dispersion relation of its period over ``sea_depth``)."""
+        if not (math.isfinite(self.period) and self.period > 0):
+            raise DisturbanceError(f"waves.period={self.period!r} is not allowed: must be "
+                                   "a finite period > 0 s")
+        if not (math.isfinite(self.height) and self.height >= 0):
+            raise DisturbanceError(f"waves.height={self.height!r} is not allowed: must be "
+                                   "a finite height >= 0 m")
+        length, limit = self.wave.wavelength, self.breaking_steepness()
+        if self.height / length <= limit:
+            return
+        where = "1/7" if not self.sea_depth else \
+            f"tanh(k h)/7 = {limit:.3g}, Miche's limit over sea_depth={self.sea_depth:g} m"
+        raise DisturbanceError(
+            f"waves: height={self.height:g} m at period={self.period:g} s is steeper than "
+            f"a wave can stand: H/L = {self.height / length:.3g} > {where} (L = "
+            f"{length:.3g} m): at this period the height is at most "
+            f"{limit * length:.3g} m")
+
+    def check_sea(self, depth: float, transmitter_depth: float | None = None) -> None:
+        """Refuse a sea the run's vehicles cannot be in: the trough, H/2 below the still
+        surface, must pass :data:`HULL_CLEARANCE` [m] over the receiver vehicle (at
+        ``depth`` [m], the run's ``--depth``, unless the waves' own ``depth`` says
+        otherwise) and :data:`LED_CLEARANCE` [m] over the LED (``transmitter_depth``
+        [m]; None: level with the receiver), and the seabed (``sea_depth``) must lie
+        below both. Raises :class:`DisturbanceError` naming the limit."""
+        if self._checked == (depth, transmitter_depth):
+            return
+        rise = 0.0 if transmitter_depth is None else depth - transmitter_depth
+        if self.depth is None:
+            vehicle = (depth, f"--depth {depth:g} m")
+            led = (depth - rise, "--transmitter-depth" if transmitter_depth is not None
+                   else "--depth")
+        else:
+            vehicle = (self.depth, f"waves.depth={self.depth:g} m")
+            led = (self.depth - rise, "waves.depth and --transmitter-depth")
+        led = (led[0], f"{led[0]:g} m ({led[1]})")
+        self._check_sea_depth(vehicle[0])
+        self._check_sea_depth(led[0], "the LED's")
+        trough = 0.5 * self.height
+        for (z, where), clearance, what, top in (
+                (vehicle, HULL_CLEARANCE, "the vehicle", "its hull's mast and fin reach"),
+                (led, LED_CLEARANCE, "the LED", "its housing reaches")):
+            if trough > z - clearance:
+                raise DisturbanceError(
+                    f"waves: height={self.height:g} m puts the trough {trough:g} m below "
+                    f"the still surface, too near {what} at {where}: the trough must stay "
+                    f"{clearance:g} m above it ({top} {clearance:g} m above its centre), "
+                    f"so the height is at most {max(0.0, 2 * (z - clearance)):.3g} m here")
+        self._checked = (depth, transmitter_depth)
 
     @property
     def wave(self) -> RegularWave:
@@ -135,8 +214,8 @@ class Waves(Disturbance):
         return 0 if world.config.constants.link is None else StripCoefficients().strips
 
     def apply(self, world: LinkWorld, t: float) -> None:
+        self.check_sea(world.config.depth, world.config.transmitter_depth)
         depth = world.config.depth if self.depth is None else self.depth
-        self._check_sea_depth(depth)
         n = self.strips_in(world)
         if n == 0:
             w = 2 * math.pi / self.period
