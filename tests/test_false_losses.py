@@ -301,3 +301,13 @@ def test_a_filter_restarts_after_an_occlusion_as_sure_as_it_was(estimator):
                seconds=6.0, particles=500)
     assert out.metrics.loss_events == 0
     assert out.metrics.rmse_steady["x1"] < 0.02
+    # Yet it was seen at once: the gate withheld the occluded samples from its start.
+    assert out.metrics.detection_delay is None  # shorter than the gate's hold: no loss
+    assert out.metrics.held_delay is not None and out.metrics.held_delay <= 0.02
+
+
+def test_a_kick_is_held_when_it_is_flagged():
+    out = _run(disturbances=("kick:start=2,rate=8",), seconds=3.0)
+    m = out.metrics
+    assert m.detection_delay is not None and m.detection_delay < 0.2
+    assert m.held_delay is not None and m.held_delay <= m.detection_delay

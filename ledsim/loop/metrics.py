@@ -66,6 +66,12 @@ class RunMetrics(DictAccess):
         detection_delay: from the start of a transient event to the first loss flagged
             that is still on at its start or begins after it [s] (0 when flagged
             before the start; None: no event, or no loss flagged).
+        held_delay: from the start of a transient event to the first step at which the
+            loop stopped taking the powers at their word: the dropout gate withheld a
+            sample (an occluder: the estimate is held on the encoder) or a loss was
+            flagged [s] (0 when already so at the start; None: no event, none, or the
+            gate's record not kept). An occlusion shorter than the gate's hold is never
+            a loss, but is held from here.
         snr_db, ber, throughput_bps, fec_share: the link budget of on-off keyed data
             on photodiode 1 (:mod:`ledsim.linkbudget`: SNR [dB], bit error rate [-],
             bits delivered under the FEC limit per second [bit/s], share of the run
@@ -98,6 +104,7 @@ class RunMetrics(DictAccess):
     lost_share: float = 0.0
     link_events: list = field(default_factory=list)
     detection_delay: float | None = None
+    held_delay: float | None = None
     snr_db: float | None = None
     ber: float | None = None
     throughput_bps: float | None = None
@@ -152,8 +159,8 @@ def run_metrics(x: np.ndarray, xhat: np.ndarray, power_clean: np.ndarray, steady
                 noise_std: float | None = None, warmup: float = 0.0,
                 occluded: np.ndarray | None = None,
                 outside: np.ndarray | None = None, noise: MeasurementNoise | None = None,
-                bit_rate: float = BIT_RATE, steps: StepFlags | None = None
-                ) -> RunMetrics:
+                bit_rate: float = BIT_RATE, steps: StepFlags | None = None,
+                withheld: np.ndarray | None = None) -> RunMetrics:
     """Metrics of one run from its true state, estimate and noise-free powers.
 
     Args:
@@ -178,6 +185,8 @@ def run_metrics(x: np.ndarray, xhat: np.ndarray, power_clean: np.ndarray, steady
         steps: what each step was (:func:`step_flags`, which judges the losses from
             the estimator's own estimates, the shading and the re-seeds; None: from
             ``lost`` and ``xhat`` alone, unshaded, no re-seeds).
+        withheld: whether the dropout gate withheld a sample at each step (None: not
+            kept), for ``held_delay``.
     """
     Te = constants.Te
     e = rmse(xhat, x)
@@ -198,6 +207,12 @@ def run_metrics(x: np.ndarray, xhat: np.ndarray, power_clean: np.ndarray, steady
         # occluder's edge dims the beam before its nominal start).
         after = [a for a, b in events if b is None or b > event_start + 1e-9]
         delay = max(after[0] - event_start, 0.0) if after else None
+    held = None
+    if event_start is not None and withheld is not None:
+        untrusted = np.asarray(withheld, dtype=bool) | (False if lost is None else lost)
+        after = [a for a, b in link_events(untrusted, Te)
+                 if b is None or b > event_start + 1e-9]
+        held = max(after[0] - event_start, 0.0) if after else None
     if noise is None and noise_std is not None:
         noise = MeasurementNoise(noise_std)
     budget = {} if noise is None else asdict(link_budget_of(p1, noise, Te, bit_rate))
@@ -215,7 +230,8 @@ def run_metrics(x: np.ndarray, xhat: np.ndarray, power_clean: np.ndarray, steady
         mean_power=float(np.mean(p1)),
         recovery_time=recovery,
         lost_share=0.0 if lost is None else float(np.mean(lost)),
-        link_events=events, detection_delay=delay, geometry_share=float(np.mean(possible)),
+        link_events=events, detection_delay=delay, held_delay=held,
+        geometry_share=float(np.mean(possible)),
         silent_error_share=silent, pointing_loss_db=None if math.isnan(loss) else loss,
         outside_domain_share=0.0 if outside is None or not after.any()
         else float(np.mean(np.asarray(outside)[after])),

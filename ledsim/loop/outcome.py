@@ -158,7 +158,9 @@ def outcome(res, xhat: np.ndarray, flags: np.ndarray, cfg: RunConfig, constants,
                           warmup=cfg.scenario_spec.warmup,
                           occluded=constants.layout.reference_power(res.occluded),
                           outside=outside, noise=noise_model, bit_rate=bit_rate,
-                          steps=steps)
+                          steps=steps,
+                          withheld=None if bound_inputs is None else
+                          ~np.asarray(bound_inputs[2]).reshape(len(res.t), -1).all(axis=1))
     nav = navigation
     if nav is not None and len(res.t):
         metrics.hull_error_rms = horizontal_rms(nav.hull, nav.station)

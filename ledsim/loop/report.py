@@ -98,6 +98,7 @@ class RunSummary(DictAccess):
     lost_share: Stat
     silent_error_share: Stat
     detection_delay: Stat
+    held_delay: Stat
     snr_db: Stat
     ber: Stat
     throughput_bps: Stat
@@ -173,6 +174,7 @@ def summarize(cfg: RunConfig, outs: list[RunOutcome]) -> RunSummary:
         lost_share=stat(lambda o: o.metrics.lost_share),
         silent_error_share=stat(lambda o: o.metrics.silent_error_share),
         detection_delay=stat(lambda o: o.metrics.detection_delay),
+        held_delay=stat(lambda o: o.metrics.held_delay),
         snr_db=stat(lambda o: o.metrics.snr_db),
         ber=stat(lambda o: o.metrics.ber),
         throughput_bps=stat(lambda o: o.metrics.throughput_bps),
