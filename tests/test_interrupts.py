@@ -134,9 +134,16 @@ def test_ctrl_c_while_the_workers_start_leaves_none_behind(monkeypatch):
         real_start(self)
         os.kill(os.getpid(), signal.SIGINT)  # between this fork and the next
 
+    from ledsim.outputs import INTERRUPTED
+
     monkeypatch.setattr(multiprocessing.process.BaseProcess, "start", start_then_ctrl_c)
-    with pytest.raises(KeyboardInterrupt):
-        mc.run_jobs(_sleep, [30.0, 30.0], workers=2, progress=False)
+    previous = signal.signal(signal.SIGINT, _flag_and_raise)  # ledsim's, see above
+    try:
+        with pytest.raises(KeyboardInterrupt):
+            mc.run_jobs(_sleep, [30.0, 30.0], workers=2, progress=False)
+    finally:
+        signal.signal(signal.SIGINT, previous)
+        INTERRUPTED.clear()
     monkeypatch.undo()
     assert multiprocessing.active_children() == []  # none left waiting on its pipe
 
