@@ -2,6 +2,7 @@
 
     python scripts/sea_losses.py [--minutes 3] [--heights 1.5] [--workers 2]   # ~40 min
     python scripts/sea_losses.py --heights 0.5 1.5      # every wave height of the table
+    python scripts/sea_losses.py --shares 0.9           # the wave rows at 0.9 of the range
 
 The rows of ``scripts/sea_table.py`` (waves from three headings at 3 and 10 m deep, at
 0.5 and 0.9 of luma's FEC range, sunlight flicker, scintillation, and the beam seas with
@@ -75,6 +76,8 @@ def main() -> None:
     ap.add_argument("--minutes", type=float, default=3.0, help="length of a run [min]")
     ap.add_argument("--heights", type=float, nargs="+", default=[1.5],
                     help="wave heights of the table to run [m] (0.5 and/or 1.5)")
+    ap.add_argument("--shares", type=float, nargs="+", default=[0.5, 0.9],
+                    help="shares of the FEC range of the wave rows to run (0.5 and/or 0.9)")
     ap.add_argument("--workers", type=int, default=2)
     ap.add_argument("--out", type=Path, default=ROOT / "docs" / "sea_losses.md")
     args = ap.parse_args()
@@ -93,13 +96,16 @@ def main() -> None:
     jobs = [(label, depth, round(share * reach, 2), dist, dome, est, True, 0, seconds,
              "luma")
             for label, depth, share, dist, dome in sea_table.cases(False)
-            if not label.startswith("waves") or any(label.startswith(h) for h in heights)
+            if not label.startswith("waves") or (
+                any(label.startswith(h) for h in heights)
+                and any(abs(share - x) < 1e-9 for x in args.shares))
             for est in ESTIMATORS]
     rows = run_jobs(sea_table.one, jobs, args.workers, "sea losses",
                     sizes=[seconds] * len(jobs))
     command = "python scripts/sea_losses.py" + (
-        "" if (args.minutes, args.heights) == (3.0, [1.5]) else
-        f" --minutes {args.minutes:g} --heights {' '.join(f'{h:g}' for h in args.heights)}")
+        "" if (args.minutes, args.heights, args.shares) == (3.0, [1.5], [0.5, 0.9]) else
+        f" --minutes {args.minutes:g} --heights {' '.join(f'{h:g}' for h in args.heights)}"
+        f" --shares {' '.join(f'{x:g}' for x in args.shares)}")
     text = table(rows, command, reach)
     print(text)
     atomic_write_text(args.out, text)
