@@ -201,18 +201,12 @@ def run_metrics(x: np.ndarray, xhat: np.ndarray, power_clean: np.ndarray, steady
         recovery = _recovery(available, Te, event_end,
                              event_start if event_start is not None else event_end)
     events = [] if lost is None else link_events(lost, Te)
-    delay = None
+    delay = held = None
     if event_start is not None:
-        # The first loss still on at the event or after it (0 if flagged before it: an
-        # occluder's edge dims the beam before its nominal start).
-        after = [a for a, b in events if b is None or b > event_start + 1e-9]
-        delay = max(after[0] - event_start, 0.0) if after else None
-    held = None
-    if event_start is not None and withheld is not None:
-        untrusted = np.asarray(withheld, dtype=bool) | (False if lost is None else lost)
-        after = [a for a, b in link_events(untrusted, Te)
-                 if b is None or b > event_start + 1e-9]
-        held = max(after[0] - event_start, 0.0) if after else None
+        delay = _delay_from(events, event_start)
+        if withheld is not None:
+            untrusted = np.asarray(withheld, dtype=bool) | (False if lost is None else lost)
+            held = _delay_from(link_events(untrusted, Te), event_start)
     if noise is None and noise_std is not None:
         noise = MeasurementNoise(noise_std)
     budget = {} if noise is None else asdict(link_budget_of(p1, noise, Te, bit_rate))
@@ -237,6 +231,14 @@ def run_metrics(x: np.ndarray, xhat: np.ndarray, power_clean: np.ndarray, steady
         else float(np.mean(np.asarray(outside)[after])),
         loss_events=int(steps.onset.sum()), false_loss_events=int(steps.false_onset.sum()),
         reseeds=int(steps.reseeded.sum()), **budget)
+
+
+def _delay_from(events: list, start: float) -> float | None:
+    """From ``start`` [s] to the first of ``events`` (``[t_on, t_off]``, ``t_off`` None
+    while on) still on at it or after it [s]: 0 if already on before it (an occluder's
+    edge dims the beam before its nominal start); None: none."""
+    after = [a for a, b in events if b is None or b > start + 1e-9]
+    return max(after[0] - start, 0.0) if after else None
 
 
 def _recovery(available: np.ndarray, Te: float, end: float, start: float) -> float | None:
