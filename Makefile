@@ -8,6 +8,9 @@ BIN     := $(VENV)/bin
 STAMP   := $(VENV)/.installed-run
 STAMP_ALL := $(VENV)/.installed-all
 OUT     ?= out/demo
+# A path in a .pth, not setuptools' import hook: Python starts in 3 ms, not 25 ms (the hook
+# imports pathlib and re), which shortens the moment where Ctrl-C meets Python's own start.
+EDITABLE := --config-settings editable_mode=compat
 # PyTorch's CPU wheels; where that index cannot be reached, pip's default one.
 TORCH_INDEX ?= https://download.pytorch.org/whl/cpu
 
@@ -16,13 +19,13 @@ TORCH_INDEX ?= https://download.pytorch.org/whl/cpu
 $(STAMP): pyproject.toml
 	@bash scripts/install_system_deps.sh
 	@test -x $(BIN)/python || $(PY) -m venv $(VENV)
-	$(BIN)/pip install -q -e .
+	$(BIN)/pip install -q -e . $(EDITABLE)
 	@touch $(STAMP)
 
 $(STAMP_ALL): $(STAMP)
 	$(BIN)/pip install -q --timeout 10 --retries 0 --index-url $(TORCH_INDEX) torch==2.13.0 \
 		|| $(BIN)/pip install -q torch==2.13.0
-	$(BIN)/pip install -q -e '.[dev,ray,onnx,train,rl]'
+	$(BIN)/pip install -q -e '.[dev,ray,onnx,train,rl]' $(EDITABLE)
 	@touch $(STAMP_ALL)
 
 demo: $(STAMP)

@@ -12,10 +12,11 @@ complete with the new run's files), with no temporary left beside it. A sweep st
 from no folder (it would resume from the finished one and run nothing): it may leave
 the cells it finished, each whole, for the next run to resume from.
 
-A Ctrl-C in the first 20-80 ms, while Python itself starts (``site``, with an editable
-install setuptools' finder; ``runpy``), comes before ledsim's handler is installed (the
-first thing ``ledsim.cli.console`` does): Python's default handler prints a traceback
-then. Such tracebacks (no ``console`` frame) are counted apart.
+A Ctrl-C in the first milliseconds, while Python itself starts (``site``, with an
+editable install setuptools' finder; ``runpy``: 3-25 ms idle, up to 0.4 s loaded),
+comes before ledsim's handler is installed (the first thing ``ledsim.cli.console``
+does): Python's default handler prints a traceback then. Such tracebacks (no
+``console`` frame) are counted apart.
 
 Counted per run: a hang (no exit within ``--deadline`` s of the signal: the run is then
 killed with SIGKILL), a traceback on stderr, a missing ``interrupted`` line or an exit
