@@ -230,7 +230,10 @@ class ControlStep:
         self.u = 0.0
         self.y_gated: np.ndarray | None = None  # what the gate passed on this step
         self._holding, self._last_command = False, 0.0
-        self.load = None if model is None else LoadObserver(model)
+        # The load it believes is at most what the motor can cancel.
+        limit = getattr(actuator, "u_limit", math.inf)
+        self.load = None if model is None else LoadObserver(
+            model, max_load=limit if math.isfinite(limit) else None)
         self._motor_u = 0.0  # the phi'' the motor gave last step [rad/s^2]
 
     @property

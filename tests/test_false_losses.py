@@ -74,6 +74,44 @@ def test_a_kick_is_not_a_load(model):
     assert abs(d) <= obs.limit
 
 
+def _cancelled(model, obs, loads):
+    """Each step's predicted load [rad/s^2] for the loads given, with a motor that
+    cancels the observer's estimate (u = -d), as the control step's does."""
+    phidot, d, out = 0.0, 0.0, []
+    for load in loads:
+        d = obs.update(-phidot, -d)  # the inertial rate is -phidot; the motor gave -d
+        out.append(d)
+        phidot = float(model.f(np.array([0.0, phidot]), load - d)[1])
+    return np.array(out)
+
+
+def test_a_load_up_to_the_motors_limit_is_followed_and_a_kick_on_it_skipped(model):
+    # The open head 3 m under 1.5 m, 6 s beam seas: up to 67 rad/s^2, beyond the 60 the
+    # observer used to believe; the control step passes the motor's limit (240).
+    Te = model.Te
+    wave = np.array([40 * math.sin(1.05 * k * Te) + 40.0 for k in range(600)])
+    capped = _cancelled(model, LoadObserver(model), wave)
+    followed = _cancelled(model, LoadObserver(model, max_load=240.0), wave)
+    # Each step's estimate is the next step's load.
+    assert np.max(np.abs(capped[20:-1] - wave[21:])) > 15.0  # never told to cancel it
+    assert np.max(np.abs(followed[20:-1] - wave[21:])) < 1.0
+    # A load that jumps past the limit at once is an impulse, as before.
+    ds = _cancelled(model, LoadObserver(model, max_load=240.0), np.full(60, 150.0))
+    assert np.all(ds == 0.0), ds
+    # A kick on a load beyond the limit is skipped, and the cap is back at the limit
+    # (a load it no longer tracks cannot stay believed); the load is followed again.
+    obs, phidot, u, ds = LoadObserver(model, max_load=240.0), 0.0, 0.0, []
+    for k in range(300):
+        d = obs.update(-phidot, u)
+        ds.append(d)
+        u = -d - 100.0 * phidot  # the motor cancels the load and holds the rate
+        phidot = float(model.f(np.array([0.0, phidot]), min(3.0 * k, 90.0) + u)[1])
+        if k == 200:
+            phidot += 8.0  # a kick of 8 rad/s
+    assert abs(ds[199] - 90.0) < 1.0 and abs(ds[201]) <= obs.limit, ds[195:205]
+    assert abs(ds[-1] - 90.0) < 1.0, ds[-5:]
+
+
 def _tracker(model, **kw):
     tr = GainTracker(model, lambda y: pair_shape_inverse(y, C), model_gain=1.0,
                      phi_variance=lambda phi, y, s: pair_phi_variance(phi, y, s, C), **kw)
