@@ -21,6 +21,7 @@ oracle      handed the true state (MuJoCo loop only): the best any estimator can
 from __future__ import annotations
 
 import math
+from dataclasses import dataclass
 from pathlib import Path
 
 from observer import checkpoint as ckpt
@@ -31,17 +32,63 @@ from observer.system import DiscreteSystem
 
 from .errors import LedsimError
 
-ESTIMATORS = {
-    "kkl": "learned KKL observer (shipped checkpoint or --checkpoint)",
-    "kkl-paper": "KKL trained with the paper's literal recipe",
-    "kkl-handover": "default KKL handing over to a slow-filter KKL after 3 s",
-    "kkl-scheduled": "gain-scheduled KKL that tunes its own gain (MuJoCo loop)",
-    "kkl-bank": "bank of fixed-gain KKL observers for 1x-13x noise (MuJoCo loop)",
-    "ekf": "extended Kalman filter",
-    "ukf": "unscented Kalman filter",
-    "pf": "bootstrap particle filter",
-    "oracle": "handed the true state (MuJoCo loop only)",
-}
+
+@dataclass(frozen=True)
+class EstimatorEntry:
+    """One estimator of the registry: what it is, its family and the worlds it runs in.
+
+    Attributes:
+        name: the ``--estimator`` value.
+        description: one line for ``--help``.
+        family: ``kkl`` (a learned KKL observer from a checkpoint), ``bayes`` (a filter
+            on the model: EKF, UKF, particle filter) or ``oracle`` (handed the truth).
+        closed_form: runs on the paper's closed-form model (``ledsim evaluate``).
+        loop: runs in the MuJoCo loop (``ledsim run``).
+        compared: one of the loop's estimators that tables and ``ledsim demo`` compare
+            (``kkl-scheduled`` is what ``kkl`` runs under supervision, so not twice).
+    """
+
+    name: str
+    description: str
+    family: str
+    closed_form: bool = True
+    loop: bool = True
+    compared: bool = True
+
+
+#: Every estimator, in the order ``--help`` lists them.
+REGISTRY = tuple(EstimatorEntry(*e) for e in (
+    ("kkl", "learned KKL observer (shipped checkpoint or --checkpoint)", "kkl"),
+    ("kkl-paper", "KKL trained with the paper's literal recipe", "kkl", True, False, False),
+    ("kkl-handover", "default KKL handing over to a slow-filter KKL after 3 s", "kkl",
+     True, False, False),
+    ("kkl-scheduled", "gain-scheduled KKL that tunes its own gain (MuJoCo loop)", "kkl",
+     True, True, False),
+    ("kkl-bank", "bank of fixed-gain KKL observers for 1x-13x noise (MuJoCo loop)", "kkl",
+     False),
+    ("ekf", "extended Kalman filter", "bayes"),
+    ("ukf", "unscented Kalman filter", "bayes"),
+    ("pf", "bootstrap particle filter", "bayes"),
+    ("oracle", "handed the true state (MuJoCo loop only)", "oracle", False),
+))
+#: name -> description, every estimator (the registry's names; kept for ``--help``).
+ESTIMATORS = {e.name: e.description for e in REGISTRY}
+#: What ``ledsim evaluate --estimator`` may run (the oracle has nothing to estimate there).
+CLOSED_FORM_ESTIMATORS = tuple(e.name for e in REGISTRY if e.closed_form)
+#: Estimators of the MuJoCo loop.
+LOOP_ESTIMATORS = tuple(e.name for e in REGISTRY if e.loop)
+#: The loop's estimators each once, as tables and ``ledsim demo`` compare them.
+COMPARED_ESTIMATORS = tuple(e.name for e in REGISTRY if e.loop and e.compared)
+#: The loop's KKL estimators (on a physical link only under supervision).
+LOOP_KKL_ESTIMATORS = tuple(e.name for e in REGISTRY if e.loop and e.family == "kkl")
+
+
+def entry(name: str) -> EstimatorEntry:
+    """The registry's entry called ``name``; :class:`LedsimError` naming the choices."""
+    for e in REGISTRY:
+        if e.name == name:
+            return e
+    raise LedsimError(f"unknown estimator {name!r}: choose one of {', '.join(ESTIMATORS)}")
 
 
 #: When ``kkl-handover`` hands over [s]: the default bank's slowest time constant (0.5 s)
@@ -72,7 +119,7 @@ def build_estimator(name: str, system: DiscreteSystem, *, model: DiscreteSystem 
             half).
     """
     model = system if model is None else model
-    if name in ("kkl", "kkl-paper", "kkl-scheduled", "kkl-bank"):
+    if entry(name).family == "kkl" and name != "kkl-handover":
         if checkpoint is None:
             raise LedsimError(f"estimator {name!r} needs a checkpoint")
         return ckpt.load(checkpoint, system, model=model, use_omega=use_omega, name=name)

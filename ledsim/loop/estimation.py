@@ -21,7 +21,7 @@ from observer.bank import ObserverBank
 from observer.noise import MeasurementNoise
 
 from ..config import PAPER_DISTANCE
-from ..estimators import build_estimator
+from ..estimators import LOOP_KKL_ESTIMATORS, build_estimator
 from ..optics import peak_power, receiver_saturates
 from ..physics.scene import WorldConfig
 from ..physics.system import GimbalSystem, IdentifiedGimbalModel
@@ -39,10 +39,11 @@ BANK = ((1.0, "default"), (3.0, "default"), (6.0, "default"), (13.0, "low-light"
 SERVED_DISTANCES = (0.05, 0.3)
 
 
-#: The loop's KKL estimators: ``kkl`` (under supervision the gain-scheduled KKL, without
-#: it the shipped observer of the distance), ``kkl-scheduled`` (always the scheduled one)
-#: and ``kkl-bank`` (the bank of fixed-gain observers that was ``kkl`` before).
-KKL_ESTIMATORS = ("kkl", "kkl-scheduled", "kkl-bank")
+#: The loop's KKL estimators (the registry's): ``kkl`` (under supervision the
+#: gain-scheduled KKL, without it the shipped observer of the distance),
+#: ``kkl-scheduled`` (always the scheduled one) and ``kkl-bank`` (the bank of fixed-gain
+#: observers that was ``kkl`` before).
+KKL_ESTIMATORS = LOOP_KKL_ESTIMATORS
 
 
 def served(cfg: RunConfig) -> bool:

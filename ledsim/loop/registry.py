@@ -16,7 +16,8 @@ import functools
 
 from ..config import LinkConstants
 from ..control import AlignmentPID, Excitation, PaperRateDamping
-from ..estimators import ESTIMATORS
+from ..estimators import COMPARED_ESTIMATORS as COMPARED_ESTIMATORS  # alias, see below
+from ..estimators import LOOP_ESTIMATORS as LOOP_ESTIMATORS
 from ..optics import nominal_noise_std, peak_power
 from ..scenario import Scenario
 
@@ -34,12 +35,8 @@ PHYSICS_SCENARIOS = {
                  description="start 0.2 rad off; u = -0.001 phidot_hat"),
     )
 }
-#: Estimators of the MuJoCo loop (``kkl-paper`` and ``kkl-handover`` exist for the
-#: closed-form model only).
-LOOP_ESTIMATORS = tuple(n for n in ESTIMATORS if n not in ("kkl-paper", "kkl-handover"))
-#: The loop's estimators each once, as tables and ``ledsim demo`` compare them
-#: (``kkl-scheduled`` is what ``kkl`` runs under supervision).
-COMPARED_ESTIMATORS = tuple(n for n in LOOP_ESTIMATORS if n != "kkl-scheduled")
+# LOOP_ESTIMATORS and COMPARED_ESTIMATORS are the estimator registry's
+# (ledsim.estimators), imported here where they were first defined.
 OMEGA_MODELS = ("identified", "simulator", "none")
 FILTER_DISTANCES = ("configured", "nominal")
 ACQUISITIONS = ("warm-up", "minimum-time")

@@ -17,6 +17,7 @@ from ..config import (
     NavigationNoise,
 )
 from ..errors import LedsimError
+from ..estimators import LOOP_KKL_ESTIMATORS
 from ..keyvalues import settings_of
 from ..physics.disturbances import check_sea, check_timing, parse_disturbance
 from ..physics.scene import WorldConfig, WorldError, transmitter_rise
@@ -48,8 +49,8 @@ def keeping_gains(settings: tuple[str, ...]) -> StationKeeping:
     return settings_of(StationKeeping, settings, "--station-keeping-gain", LedsimError)
 
 
-#: The KKL estimators (on a physical link only under supervision).
-KKL_ON_BENCH = ("kkl", "kkl-scheduled", "kkl-bank")
+#: The KKL estimators (on a physical link only under supervision): the registry's.
+KKL_ON_BENCH = LOOP_KKL_ESTIMATORS
 
 
 def validate_run(cfg) -> None:

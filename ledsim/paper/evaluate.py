@@ -16,6 +16,7 @@ from observer.metrics import converged, mean_and_spread, rmse
 
 from ..config import MIN_DISTANCE, LinkConstants
 from ..errors import LedsimError
+from ..estimators import CLOSED_FORM_ESTIMATORS as CLOSED_FORM_ESTIMATORS  # alias
 from ..estimators import build_estimator
 from ..montecarlo import run_jobs
 from ..outputs import atomic_write_text
@@ -27,9 +28,8 @@ from .scenarios import PAPER_TABLE1, PAPER_TABLE2, Noise, Trajectory, get_scenar
 
 CONVERGENCE_TOLERANCE = 0.02  # rad: steady-state x1 RMSE below this counts as converged
 KEYS = ("x1", "x2", "y1", "y2")
-#: What ``ledsim evaluate --estimator`` may run (the oracle has nothing to estimate here).
-CLOSED_FORM_ESTIMATORS = ("kkl", "kkl-paper", "kkl-handover", "kkl-scheduled", "ekf",
-                          "ukf", "pf")
+# CLOSED_FORM_ESTIMATORS (what ``ledsim evaluate --estimator`` may run) is the
+# registry's (ledsim.estimators), an alias here where it was first defined.
 #: Random initial guesses of the convergence share are drawn from this seed.
 STARTS_SEED = 12345
 

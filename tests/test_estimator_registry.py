@@ -1,0 +1,45 @@
+"""The estimator registry: one list, from which every other list of names is derived."""
+
+import pytest
+
+from ledsim.errors import LedsimError
+from ledsim.estimators import (
+    CLOSED_FORM_ESTIMATORS,
+    COMPARED_ESTIMATORS,
+    ESTIMATORS,
+    LOOP_ESTIMATORS,
+    LOOP_KKL_ESTIMATORS,
+    REGISTRY,
+    entry,
+)
+
+
+def test_the_lists_are_the_registrys_and_keep_their_old_names_and_order():
+    from ledsim.loop import config, estimation, validation
+    from ledsim.paper import evaluate
+
+    assert list(ESTIMATORS) == [e.name for e in REGISTRY]
+    assert CLOSED_FORM_ESTIMATORS == ("kkl", "kkl-paper", "kkl-handover", "kkl-scheduled",
+                                      "ekf", "ukf", "pf")
+    assert LOOP_ESTIMATORS == ("kkl", "kkl-scheduled", "kkl-bank", "ekf", "ukf", "pf",
+                               "oracle")
+    assert COMPARED_ESTIMATORS == ("kkl", "kkl-bank", "ekf", "ukf", "pf", "oracle")
+    assert LOOP_KKL_ESTIMATORS == ("kkl", "kkl-scheduled", "kkl-bank")
+    # The names where they were first defined still work (aliases).
+    assert evaluate.CLOSED_FORM_ESTIMATORS is CLOSED_FORM_ESTIMATORS
+    assert config.LOOP_ESTIMATORS is LOOP_ESTIMATORS
+    assert config.COMPARED_ESTIMATORS is COMPARED_ESTIMATORS
+    assert estimation.KKL_ESTIMATORS is LOOP_KKL_ESTIMATORS
+    assert validation.KKL_ON_BENCH is LOOP_KKL_ESTIMATORS
+
+
+def test_every_entry_names_a_family_and_a_world():
+    for e in REGISTRY:
+        assert e.family in ("kkl", "bayes", "oracle"), e
+        assert e.closed_form or e.loop, e
+        assert e.loop or not e.compared, e
+
+
+def test_an_unknown_estimator_is_one_line_naming_the_choices():
+    with pytest.raises(LedsimError, match="unknown estimator 'kf': choose one of kkl, "):
+        entry("kf")
