@@ -6,7 +6,10 @@ Runs short closed-loop runs (every loop estimator, every disturbance kind, witho
 IMU, without station keeping, at other distances and noise) and hashes every series of
 each trace (the true state, the estimate, the powers, the torque, the flags) and the
 run's metrics, bit for bit. Equal fingerprints before and after a change mean the
-change moved no number of those runs; ``--compare`` names the runs that moved.
+change moved no number of those runs; ``--compare`` names the runs that moved and what
+in them, over the series and metrics both files have (a new results key is listed, not
+counted as a move; a file of an earlier release, one digest a run, is compared by
+digest).
 """
 
 from __future__ import annotations
@@ -38,22 +41,60 @@ CASES = ([(f"{e}", dict(estimator=e)) for e in LOOP_ESTIMATORS]
             ("kkl unsupervised", dict(supervision=False)),
             ("ekf nominal d=0.15", dict(estimator="ekf", distance=0.15,
                                         filter_distance="nominal")),
-            ("oracle if2", dict(estimator="oracle", scenario="if2"))])
+            ("oracle if2", dict(estimator="oracle", scenario="if2")),
+            # Physical links: the scheduled KKL's gain tracking, the sea, the vehicle.
+            ("kkl luma 30 m", dict(link="luma", distance=30.0)),
+            ("ekf luma 30 m waves", dict(estimator="ekf", link="luma", distance=30.0,
+                                         depth=10.0,
+                                         disturbances=("waves:height=1,period=8",)))])
 
 
-def fingerprint(seconds: float = 2.0, seed: int = 1) -> dict[str, str]:
-    """``{case: sha256}`` of each case's trace series and metrics."""
+def _flat(value, prefix: str = "") -> dict[str, object]:
+    """``{"a.b": leaf}`` of a nested JSON-able value."""
+    if isinstance(value, dict):
+        out: dict[str, object] = {}
+        for k, v in value.items():
+            out.update(_flat(v, f"{prefix}{k}."))
+        return out
+    return {prefix[:-1]: value}
+
+
+def _sha(data: bytes) -> str:
+    return hashlib.sha256(data).hexdigest()[:16]
+
+
+def fingerprint(seconds: float = 2.0, seed: int = 1) -> dict[str, dict]:
+    """Per case: ``digest`` (one sha256 of the trace series and the metrics, as earlier
+    releases wrote), ``series`` (a sha256 of each series) and ``metrics`` (each metric's
+    value, flattened), so that a comparison can skip keys one side does not have."""
     out = {}
     for name, kw in CASES:
         o = run_once(RunConfig(seconds=seconds, particles=300, **kw), seed, keep_trace=True)
         h = hashlib.sha256()
         series = o.trace.series()
+        hashes = {}
         for key in CORE:
+            data = np.ascontiguousarray(series[key]).tobytes()
             h.update(key.encode())
-            h.update(np.ascontiguousarray(series[key]).tobytes())
-        h.update(json.dumps(to_jsonable(o.metrics), sort_keys=True).encode())
-        out[name] = h.hexdigest()[:16]
+            h.update(data)
+            hashes[key] = _sha(data)
+        metrics = to_jsonable(o.metrics)
+        h.update(json.dumps(metrics, sort_keys=True).encode())
+        out[name] = {"digest": h.hexdigest()[:16], "series": hashes,
+                     "metrics": _flat(metrics)}
     return out
+
+
+def moved_keys(old, new: dict) -> list[str] | None:
+    """The series and metrics of one case that differ between ``old`` and ``new``, over
+    the keys both have; None when they cannot be told apart key by key (``old`` is a
+    bare digest of an earlier release: then the digests are compared)."""
+    if isinstance(old, str):
+        return None if old == new["digest"] else ["digest"]
+    moved = [k for k in old["series"] if k in new["series"]
+             and old["series"][k] != new["series"][k]]
+    return moved + [k for k in old["metrics"] if k in new["metrics"]
+                    and old["metrics"][k] != new["metrics"][k]]
 
 
 def main() -> int:
@@ -63,15 +104,29 @@ def main() -> int:
     ap.add_argument("--compare", help="a fingerprint file to compare with")
     args = ap.parse_args()
     prints = fingerprint()
-    for name, h in prints.items():
-        print(f"{h}  {name}")
+    for name, p in prints.items():
+        print(f"{p['digest']}  {name}")
     if args.json:
         Path(args.json).write_text(json.dumps(prints, indent=2) + "\n")
     if args.compare:
         old = json.loads(Path(args.compare).read_text())
-        moved = [n for n in prints if old.get(n) != prints[n]]
-        print(f"{len(moved)} of {len(prints)} runs moved" + (": " + ", ".join(moved)
-                                                           if moved else ""))
+        moved, added = [], []
+        for name, p in prints.items():
+            if name not in old:
+                added.append(name)
+                continue
+            keys = moved_keys(old[name], p)
+            if keys:
+                moved.append(f"{name} ({', '.join(keys)})")
+            elif not isinstance(old[name], str):
+                new_keys = sorted(set(p["metrics"]) - set(old[name]["metrics"]))
+                if new_keys:
+                    print(f"  {name}: new keys, not compared: {', '.join(new_keys)}")
+        compared = len(prints) - len(added)
+        print(f"{len(moved)} of {compared} runs moved" + (": " + "; ".join(moved)
+                                                         if moved else ""))
+        if added:
+            print(f"not in {args.compare}: {', '.join(added)}")
         return 1 if moved else 0
     return 0
 
