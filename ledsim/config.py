@@ -14,7 +14,7 @@ import math
 from dataclasses import asdict, dataclass, field, replace
 from typing import TYPE_CHECKING, Protocol
 
-from .errors import LedsimError
+from .errors import LedsimError, check_ranges
 
 if TYPE_CHECKING:  # imported where used: the CLI starts before numpy (thread pinning)
     from observer.noise import MeasurementNoise
@@ -130,9 +130,7 @@ class LinkConstants:
             ("receiver.c1", self.receiver.c1, self.receiver.c1 > 0, "> 0 rad"),
             ("receiver.c2", self.receiver.c2, self.receiver.c2 > 0, "> 0 rad"),
         ]
-        for name, value, ok, allowed in checks:
-            if not (ok and math.isfinite(value)):
-                raise ConfigError(f"{name}={value!r} is not allowed: must be {allowed}")
+        check_ranges(checks, ConfigError, "=")
         if len(self.process_noise_std) != 2 or min(self.process_noise_std) < 0:
             raise ConfigError(
                 f"process_noise_std={self.process_noise_std!r} is not allowed: "
@@ -261,24 +259,20 @@ class NavigationNoise:
     fix_outlier_size: float = 1.0
 
     def __post_init__(self) -> None:
-        for name in ("gyro_noise_density", "gyro_bias_instability", "accel_noise_density",
-                     "accel_bias_instability", "dvl_noise", "fix_noise", "depth_noise",
-                     "magnetometer_noise"):
-            value = getattr(self, name)
-            if not (math.isfinite(value) and value >= 0):
-                raise ConfigError(f"{name}={value!r} is not allowed: must be >= 0 and finite")
-        for name in ("gyro_bias_time", "accel_bias_time", "dvl_rate", "fix_rate",
-                     "magnetometer_rate"):
-            value = getattr(self, name)
-            if not (math.isfinite(value) and value > 0):
-                raise ConfigError(f"{name}={value!r} is not allowed: must be > 0 and finite")
-        for name, high, unit in (("fix_latency", 5.0, " s"), ("fix_range_error", 0.1, ""),
-                                 ("fix_outlier_share", 0.5, ""),
-                                 ("fix_outlier_size", 100.0, " m")):
-            value = getattr(self, name)
-            if not (math.isfinite(value) and 0 <= value <= high):
-                raise ConfigError(f"{name}={value!r} is not allowed: must be in "
-                                  f"[0, {high:g}]{unit}")
+        v = self.__dict__
+        check_ranges([(n, v[n], v[n] >= 0, ">= 0 and finite") for n in (
+            "gyro_noise_density", "gyro_bias_instability", "accel_noise_density",
+            "accel_bias_instability", "dvl_noise", "fix_noise", "depth_noise",
+            "magnetometer_noise")], ConfigError, "=")
+        check_ranges([(n, v[n], v[n] > 0, "> 0 and finite") for n in (
+            "gyro_bias_time", "accel_bias_time", "dvl_rate", "fix_rate",
+            "magnetometer_rate")], ConfigError, "=")
+        check_ranges([(n, v[n], 0 <= v[n] <= high, f"in [0, {high:g}]{unit}")
+                      for n, high, unit in (("fix_latency", 5.0, " s"),
+                                            ("fix_range_error", 0.1, ""),
+                                            ("fix_outlier_share", 0.5, ""),
+                                            ("fix_outlier_size", 100.0, " m"))],
+                     ConfigError, "=")
         if not (isinstance(self.encoder_bits, int) and 1 <= self.encoder_bits <= 32):
             raise ConfigError(f"encoder_bits={self.encoder_bits!r} is not allowed: must be an "
                               "integer in 1..32")

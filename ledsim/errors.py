@@ -7,6 +7,8 @@ is) the same way. Each part of the package raises its own subclass so a message 
 where it came from.
 """
 
+import math
+
 
 class LedsimError(ValueError):
     """Bad user input or an unusable file, reported by the CLI as one line, exit code 2."""
@@ -21,6 +23,16 @@ _ESCAPED = {ord(c): repr(c)[1:-1] for c in LINE_BREAKS}
 def one_line(message: str) -> str:
     """``message`` as one line: the line breaks in it shown escaped (``\\n``)."""
     return message.translate(_ESCAPED)
+
+
+def check_ranges(checks, error: type[LedsimError] = LedsimError, joiner: str = " ") -> None:
+    """Raise ``error`` for the first of ``checks`` that fails: each is ``(name, value,
+    ok, allowed)``, failing when ``ok`` is false or ``value`` is not finite, with the
+    message "NAME VALUE is not allowed: must be ALLOWED" (``joiner`` between the name and
+    the value: ``" "`` for a flag, ``"="`` for a field)."""
+    for name, value, ok, allowed in checks:
+        if not (ok and math.isfinite(value)):
+            raise error(f"{name}{joiner}{value!r} is not allowed: must be {allowed}")
 
 
 #: Former name, kept so older scripts keep working.

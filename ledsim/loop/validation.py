@@ -16,7 +16,7 @@ from ..config import (
     LinkConstants,
     NavigationNoise,
 )
-from ..errors import LedsimError
+from ..errors import LedsimError, check_ranges
 from ..estimators import LOOP_KKL_ESTIMATORS
 from ..keyvalues import settings_of
 from ..physics.disturbances import check_sea, check_timing, parse_disturbance
@@ -117,9 +117,7 @@ def validate_run(cfg) -> None:
     if cfg.transmitter_depth is not None:
         checks.append(("--transmitter-depth", cfg.transmitter_depth,
                        0.2 <= cfg.transmitter_depth <= 500.0, "in [0.2, 500] m"))
-    for flag, value, ok, allowed in checks:
-        if not (ok and math.isfinite(value)):
-            raise LedsimError(f"{flag} {value!r} is not allowed: must be {allowed}")
+    check_ranges(checks)
     transmitter_rise(cfg.depth, cfg.transmitter_depth, cfg.distance,
                      ("--depth", "--transmitter-depth"))
     disturbances = [parse_disturbance(d) for d in cfg.disturbances]

@@ -6,7 +6,6 @@ same measurement sequences). The runs go through the shared Monte-Carlo runner.
 
 from __future__ import annotations
 
-import math
 from dataclasses import dataclass, field
 from pathlib import Path
 
@@ -15,7 +14,7 @@ import numpy as np
 from observer.metrics import converged, mean_and_spread, rmse
 
 from ..config import MIN_DISTANCE, LinkConstants
-from ..errors import LedsimError
+from ..errors import LedsimError, check_ranges
 from ..estimators import CLOSED_FORM_ESTIMATORS as CLOSED_FORM_ESTIMATORS  # alias
 from ..estimators import build_estimator
 from ..montecarlo import run_jobs
@@ -61,9 +60,7 @@ class EvaluationConfig:
                   ("--seeds", self.seeds, self.seeds >= 1, ">= 1"),
                   ("--starts", self.starts, self.starts >= 0, ">= 0"),
                   ("--particles", self.particles, self.particles >= 1, ">= 1")]
-        for flag, value, ok, allowed in checks:
-            if not (ok and math.isfinite(value)):
-                raise LedsimError(f"{flag} {value!r} is not allowed: must be {allowed}")
+        check_ranges(checks)
         for name in self.estimators:
             if name not in CLOSED_FORM_ESTIMATORS:
                 raise LedsimError(f"--estimator {name!r} is not allowed here: choose one "

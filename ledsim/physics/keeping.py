@@ -21,6 +21,7 @@ from observer.rowops import columns, ops
 from observer.rows import Rows
 
 from ..config import ConfigError, NavigationNoise
+from ..errors import check_ranges
 from .world import LinkWorld
 
 
@@ -75,12 +76,11 @@ class StationKeeping:
     load_deadband: float = 4.0
 
     def __post_init__(self) -> None:
-        for f in fields(self):
-            v = getattr(self, f.name)
-            timed = f.name.endswith("_time")
-            if not (math.isfinite(v) and (v > 0 if timed else v >= 0)):
-                raise ConfigError(f"{f.name}={v!r} is not allowed: must be "
-                                  f"{'> 0 s' if timed else '>= 0'} and finite")
+        values = [(f.name, getattr(self, f.name), f.name.endswith("_time"))
+                  for f in fields(self)]
+        check_ranges([(n, v, v > 0 if timed else v >= 0,
+                       f"{'> 0 s' if timed else '>= 0'} and finite")
+                      for n, v, timed in values], ConfigError, "=")
 
 
 class StationKeeper(Rows):

@@ -16,7 +16,7 @@ import mujoco
 import numpy as np
 
 from ..config import MIN_DISTANCE, ConfigError, LinkConstants
-from ..errors import LedsimError
+from ..errors import LedsimError, check_ranges
 from ..resources import scene_path
 from .scene_ids import (  # noqa: F401 (re-exported)
     MAGNETOMETER,
@@ -125,9 +125,7 @@ class WorldConfig:
                            0.2 <= self.transmitter_depth <= 500.0, "in [0.2, 500] m"))
         if self.hull_mass is not None:
             checks.append(("hull_mass", self.hull_mass, self.hull_mass > 0, "> 0 kg"))
-        for name, value, ok, allowed in checks:
-            if not (ok and math.isfinite(value)):
-                raise ConfigError(f"{name}={value!r} is not allowed: must be {allowed}")
+        check_ranges(checks, ConfigError, "=")
         ratio = self.constants.Te / self.timestep
         if abs(ratio - round(ratio)) > 1e-9:
             raise ConfigError(f"timestep={self.timestep!r} is not allowed: Te="
