@@ -47,7 +47,7 @@ from .estimation import (  # noqa: F401 (re-exported)
 )
 from .gate import DropoutGate
 from .given import GivenRecord
-from .outcome import Navigation, RunOutcome, Trace, achievable_power, outcome  # noqa: F401
+from .outcome import Navigation, RunOutcome, RunRecord, Trace, achievable_power, outcome  # noqa: F401
 from .slew import TimeOptimalSlew
 from .start import Surroundings, start_world  # noqa: F401 (re-exported)
 from .supervisor import LinkSupervisor
@@ -269,17 +269,17 @@ class ClosedLoop:
                     report_progress((k + 1) / self.steps)
         wall = time.perf_counter() - t0
         times = np.arange(self.steps) * Te
-        return [outcome(run.result(times), run.xhat, run.flags, self.cfg,
-                        self.system.constants, run.disturbances, run.supervised,
-                        run.spent, wall / n, keep[i],
-                        None if run.station is None else
-                        Navigation(run.hull, run.station, run.navigated), window,
-                        run.vehicle is not None and run.vehicle.station_keeping,
-                        None if run.given is None else
-                        run.given.series(run.step.estimator, self.cfg, run.u,
-                                         run.measured), run.noise,
-                        (self.model, run.u, run.measured), run.outside, run.medium,
-                        own=run.own, reseeded=run.reseeded, xhat_std=run.xhat_std)
+        return [outcome(RunRecord(
+                    run.result(times), run.xhat, run.flags, run.disturbances, run.supervised,
+                    run.spent,
+                    None if run.station is None else
+                    Navigation(run.hull, run.station, run.navigated),
+                    run.vehicle is not None and run.vehicle.station_keeping,
+                    None if run.given is None else
+                    run.given.series(run.step.estimator, self.cfg, run.u, run.measured),
+                    run.noise, (self.model, run.u, run.measured), run.outside, run.medium,
+                    run.own, run.reseeded, run.xhat_std),
+                    self.cfg, self.system.constants, wall / n, keep[i], window)
                 for i, run in enumerate(runs)]
 
 

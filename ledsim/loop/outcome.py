@@ -108,27 +108,61 @@ def achievable_power(res, c) -> np.ndarray:
                                    receiver_peak(c))
 
 
-def outcome(res, xhat: np.ndarray, flags: np.ndarray, cfg: RunConfig, constants,
-            disturbances, supervised: bool, spent: float, wall: float,
-            keep_trace: bool, navigation: Navigation | None = None,
-            window: float | None = None, station_keeping: bool | None = None,
-            given: dict | None = None, noise=None, bound_inputs=None,
-            outside: np.ndarray | None = None,
-            medium: np.ndarray | None = None, *, own: np.ndarray | None = None,
-            reseeded: np.ndarray | None = None,
-            xhat_std: np.ndarray | None = None) -> RunOutcome:
-    """A run's :class:`RunOutcome` from its simulation result, its estimates, its
-    (lost, acquiring) flags per step, the seconds spent controlling and in all, its
-    vehicle's :class:`Navigation` (None: no vehicle) and the window [s] of per-window
-    metrics (None: none). ``noise``: the run's measurement noise (None: the link's at
-    the run's noise scale). ``bound_inputs``: (the estimators' model, the input u each
-    step told them [rad/s^2], the samples the gate passed) for the bound (None: none);
-    ``outside``: the steps whose estimator was outside its training box (None: none);
-    ``medium``: the water's factor on the reference photodiode's power each step
-    (scintillation; None: 1). ``own``: the estimator's own estimates where ``xhat``
-    holds the held ones while lost (None: ``xhat``); ``reseeded``: the steps the
-    supervisor restarted the estimator (None: none); ``xhat_std``: the reported
-    estimate's standard deviation per step (NaN where unknown; None: not kept)."""
+@dataclass
+class RunRecord:
+    """What one closed-loop run recorded, for its :func:`outcome`.
+
+    Attributes:
+        result: the world's series (:class:`~ledsim.physics.simulation.SimResult`).
+        xhat: the estimate the run reports each step (held while lost), ``(T, n)``.
+        flags: (lost, acquiring) per step, ``(T, 2)``.
+        disturbances: the run's disturbances (the first transient one times the event).
+        supervised: whether a supervisor flagged losses.
+        spent: seconds spent controlling [s].
+        navigation: the vehicle's :class:`Navigation` (None: no vehicle).
+        station_keeping: whether the vehicle kept station (None: no vehicle).
+        given: what the estimator was given, per series (None: not kept).
+        noise: the run's measurement noise (None: the link's at the run's noise scale).
+        bound_inputs: (the estimators' model, the input u each step told them
+            [rad/s^2], the samples the gate passed) for the bound (None: none).
+        outside: the steps whose estimator was outside its training box (None: none).
+        medium: the water's factor on the reference photodiode's power each step
+            (scintillation; None: 1).
+        own: the estimator's own estimates where ``xhat`` holds the held ones while lost
+            (None: ``xhat``).
+        reseeded: the steps the supervisor restarted the estimator (None: none).
+        xhat_std: the reported estimate's standard deviation per step (NaN where
+            unknown; None: not kept).
+    """
+
+    result: object
+    xhat: np.ndarray
+    flags: np.ndarray
+    disturbances: list
+    supervised: bool
+    spent: float
+    navigation: Navigation | None = None
+    station_keeping: bool | None = None
+    given: dict | None = None
+    noise: object = None
+    bound_inputs: tuple | None = None
+    outside: np.ndarray | None = None
+    medium: np.ndarray | None = None
+    own: np.ndarray | None = None
+    reseeded: np.ndarray | None = None
+    xhat_std: np.ndarray | None = None
+
+
+def outcome(record: RunRecord, cfg: RunConfig, constants, wall: float, keep_trace: bool,
+            window: float | None = None) -> RunOutcome:
+    """A run's :class:`RunOutcome` from its :class:`RunRecord`, its link ``constants``,
+    the wall time it took [s], whether to keep its trace, and the window [s] of
+    per-window metrics (None: none)."""
+    r = record
+    res, xhat, disturbances, supervised = r.result, r.xhat, r.disturbances, r.supervised
+    navigation, given, noise, bound_inputs = r.navigation, r.given, r.noise, r.bound_inputs
+    outside, medium, own, reseeded = r.outside, r.medium, r.own, r.reseeded
+    flags, spent, station_keeping, xhat_std = r.flags, r.spent, r.station_keeping, r.xhat_std
     events = [d for d in disturbances if d.event_end is not None]
     flags = flags.reshape(-1, 2)
     best = achievable_power(res, constants)
