@@ -12,6 +12,7 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass, fields
+from typing import NamedTuple
 
 import numpy as np
 
@@ -165,7 +166,7 @@ class StationKeeper(Rows):
                        pos[:, 2], self.home_position[:, 0], self.home_position[:, 1],
                        self.home_heading, self.surface, *d.T, *velocity.T, omega[:, 1],
                        omega[:, 2])
-        out = _pd_terms(ops(n), self.gains, self._kp, self._kd, *cols)
+        out = _pd_terms(ops(n), self.gains, self._kp, self._kd, PDInputs(*cols))
         return np.array([out]) if n == 1 else np.array(out).T
 
 
@@ -173,12 +174,45 @@ class StationKeeper(Rows):
 _DIAG = np.array([0, 1, 2, 7, 8, 3, 4, 5])
 
 
-def _pd_terms(o, g: StationKeeping, kp, kd, r10, r00, r20, px, py, pz, hx, hy, heading0,
-              surface, vx_, vy_, vz_, vpitch, vyaw, vvx, vvy, vvz, ux, uy, uz, wy, wz):
+class PDInputs(NamedTuple):
+    """What the station-keeping PD reads of one hull (floats) or of N (columns): the
+    navigated attitude's entries R[1,0], R[0,0], R[2,0] and position [m]; home (x, y
+    [m], heading [rad], depth of the surface [m]); the navigation's variances of x, y,
+    z [m^2], pitch, yaw [rad^2], vx, vy, vz [m^2/s^2]; the hull-frame velocity [m/s]
+    and the pitch and yaw rates [rad/s]."""
+
+    r10: object
+    r00: object
+    r20: object
+    px: object
+    py: object
+    pz: object
+    hx: object
+    hy: object
+    heading0: object
+    surface: object
+    var_x: object
+    var_y: object
+    var_z: object
+    var_pitch: object
+    var_yaw: object
+    var_vx: object
+    var_vy: object
+    var_vz: object
+    ux: object
+    uy: object
+    uz: object
+    wy: object
+    wz: object
+
+
+def _pd_terms(o, g: StationKeeping, kp, kd, x: PDInputs):
     """The PD's five terms of one hull (floats) or of N (columns), ``o`` the arithmetic
     (:mod:`observer.rowops`): the navigated pose's error from home, each error and
     velocity shrunk by its soft deadband (the part beyond ``deadband`` of the
     navigation's own standard deviations: ``max(0, 1 - (k^2 var / e^2)^2)``)."""
+    (r10, r00, r20, px, py, pz, hx, hy, heading0, surface, vx_, vy_, vz_, vpitch, vyaw,
+     vvx, vvy, vvz, ux, uy, uz, wy, wz) = x
     heading = o.atan2(r10, r00)
     pitch = o.asin(o.maximum(-1.0, o.minimum(1.0, -r20)))
     c, s = o.cos(heading), o.sin(heading)
