@@ -132,23 +132,25 @@ def summary_lines(groups: dict) -> list[str]:
             "gimbal cannot turn to is small beside the azimuth's."]
     runs = [r for rs in groups.values() for r in rs if "loss_events" in r]
     if runs:
-        out += ["", "False losses per 10 minutes, over every row of each estimator (the "
-                "target: at most 1 in each row's runs).", "",
-                "| estimator | minutes | losses | false losses | per 10 min | worst row's "
-                "false per 10 min |", "|---|---|---|---|---|---|"]
+        out += ["", "False losses per 10 minutes, over every row of each estimator and "
+                "IMU setting (the target: at most 1 in each row's runs; these runs last 20 "
+                "s, `docs/sea_losses.md` runs the rows with the IMU for minutes).", "",
+                "| estimator | IMU | minutes | losses | false losses | per 10 min | worst "
+                "row's false per 10 min |", "|---|---|---|---|---|---|---|"]
         for est in ESTIMATORS:
-            if est == "oracle":
-                continue
-            mine = [(k, rs) for k, rs in groups.items() if k[2] == est]
-            if not mine:
-                continue
-            minutes = sum(r["seconds"] for _, rs in mine for r in rs) / 60
-            lost = sum(r["loss_events"] for _, rs in mine for r in rs)
-            false = sum(r["false_loss_events"] for _, rs in mine for r in rs)
-            worst = max(10 * sum(r["false_loss_events"] for r in rs)
-                        / (sum(r["seconds"] for r in rs) / 60) for _, rs in mine)
-            out.append(f"| {est} | {minutes:.0f} | {lost} | {false} | "
-                       f"{10 * false / minutes:.2f} | {worst:.1f} |")
+            for imu in (True, False):
+                if est == "oracle":
+                    continue
+                mine = [(k, rs) for k, rs in groups.items() if k[2] == est and k[3] == imu]
+                if not mine:
+                    continue
+                minutes = sum(r["seconds"] for _, rs in mine for r in rs) / 60
+                lost = sum(r["loss_events"] for _, rs in mine for r in rs)
+                false = sum(r["false_loss_events"] for _, rs in mine for r in rs)
+                worst = max(10 * sum(r["false_loss_events"] for r in rs)
+                            / (sum(r["seconds"] for r in rs) / 60) for _, rs in mine)
+                out.append(f"| {est} | {'yes' if imu else 'no'} | {minutes:.0f} | {lost} | "
+                           f"{false} | {10 * false / minutes:.2f} | {worst:.1f} |")
     return out
 
 
