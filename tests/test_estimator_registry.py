@@ -43,3 +43,17 @@ def test_every_entry_names_a_family_and_a_world():
 def test_an_unknown_estimator_is_one_line_naming_the_choices():
     with pytest.raises(LedsimError, match="unknown estimator 'kf': choose one of kkl, "):
         entry("kf")
+
+
+def test_a_link_preset_names_the_designs_its_run_loads():
+    # Issue 47: what differs between the bench and a physical link is asked of the
+    # preset, not of its name; the shipped checkpoints it names exist.
+    from ledsim.radiometry.presets import LINK_PRESETS
+    from ledsim.resources import require_shipped_checkpoint
+
+    for name, p in LINK_PRESETS.items():
+        bench = name == "paper"
+        assert p.kkl_design == ("default" if bench else "lens"), name
+        assert p.scheduled_design == ("scheduled" if bench else "scheduled-lens"), name
+        assert p.holds_gain_when_driven is not bench, name
+        require_shipped_checkpoint(0.085, "mujoco", p.scheduled_design)

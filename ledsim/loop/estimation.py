@@ -25,7 +25,7 @@ from ..estimators import LOOP_KKL_ESTIMATORS, build_estimator
 from ..optics import peak_power, receiver_saturates
 from ..physics.scene import WorldConfig
 from ..physics.system import GimbalSystem, IdentifiedGimbalModel
-from ..radiometry.presets import kkl_reference_constants
+from ..radiometry.presets import kkl_reference_constants, preset_named
 from ..resources import require_shipped_checkpoint
 from .config import RunConfig
 
@@ -155,14 +155,14 @@ def kkl_members(cfg: RunConfig) -> list[KKLMember]:
                                             and not cfg.checkpoint):
         path = Path(cfg.checkpoint) if cfg.checkpoint else require_shipped_checkpoint(
             REFERENCE_DISTANCE, "mujoco",
-            design="scheduled" if cfg.link == "paper" else "scheduled-lens")
+            design=preset_named(cfg.link).scheduled_design)
         return [KKLMember(1.0, path, ref)]
     if cfg.checkpoint:
         return [KKLMember(1.0, Path(cfg.checkpoint), cfg.world_config())]
     if not cfg.supervision:
         return [KKLMember(1.0, require_shipped_checkpoint(cfg.distance, "mujoco"),
                           cfg.world_config())]
-    design = "default" if cfg.link == "paper" else "lens"
+    design = preset_named(cfg.link).kkl_design
     return [KKLMember(s, require_shipped_checkpoint(REFERENCE_DISTANCE, "mujoco", design,
                                                     noise=s),
                       noisier(ref, s)) for s in BANK_NOISE]
@@ -224,7 +224,7 @@ def loop_estimator(cfg: RunConfig, system: GimbalSystem, model: IdentifiedGimbal
     observers = [build_estimator("kkl", ref if m.world == first else member_system(m.world),
                                  model=omega_f, checkpoint=m.checkpoint,
                                  use_omega=cfg.omega_model != "none") for m in members]
-    if cfg.link != "paper" and DRIVEN_LEVEL is not None:  # metres of sea: docs/sea.md
+    if preset_named(cfg.link).holds_gain_when_driven and DRIVEN_LEVEL is not None:
         for o in observers:
             if hasattr(o, "schedule"):
                 o.schedule = replace(o.schedule, driven=DRIVEN_LEVEL,

@@ -52,6 +52,24 @@ class LinkPreset:
     def physical(self) -> bool:
         return self.transmitter is not None
 
+    # What differs between the bench and a physical link, asked of the preset (not of
+    # its name) by what builds a run.
+    @property
+    def kkl_design(self) -> str:
+        """The shipped KKL bank's design: the bench's photodiodes, or a lensed head."""
+        return "lens" if self.physical else "default"
+
+    @property
+    def scheduled_design(self) -> str:
+        """The shipped gain-scheduled KKL's design."""
+        return "scheduled-lens" if self.physical else "scheduled"
+
+    @property
+    def holds_gain_when_driven(self) -> bool:
+        """Whether the scheduled KKL holds its gain while the motor works against a load
+        (metres of sea: docs/sea.md); the bench keeps the published schedule."""
+        return self.physical
+
     def link(self, water: Water, depth: float = 10.0, surface_irradiance: float = 0.0
              ) -> RadiometricLink:
         """The physical link in ``water``."""
