@@ -85,23 +85,17 @@ class LoadObserver:
             predicted = float(self.model.f(np.array([0.0, -self._rate]), u)[1])
             missed = (-inertial_rate - predicted) / self.input_gain
             still = abs(inertial_rate) <= self.still_rate
-            if self.large:
-                if abs(missed - self._load) > self.jump or not still:
-                    # An impulse, or the model's own error: back under the limit, so
-                    # that a load it no longer tracks cannot stay believed.
-                    self.large, self._rate = False, inertial_rate
-                    self._load = min(max(self._load, -self.limit), self.limit)
-                    self._trend = 0.0
-                    self.d = self._load
-                    return self.d
-                self.large = abs(missed) > self.limit
-            elif abs(missed) > self.limit:
-                # A load that grew past the limit is followed on; a miss that jumps past
-                # it, or one while the gimbal spins, is an impulse (a kick).
-                if not (still and abs(missed - self._load) <= self.jump):
+            if self.large or abs(missed) > self.limit:
+                # Past the limit, a load that grew there is followed on; a miss that
+                # jumps, or one while the gimbal spins, is an impulse (a kick) or the
+                # model's own error.
+                if not still or abs(missed - self._load) > self.jump:
+                    if self.large:  # back under the limit: a load no longer tracked
+                        self.large, self._trend = False, 0.0  # cannot stay believed
+                        self._load = self.d = min(max(self._load, -self.limit), self.limit)
                     self._rate = inertial_rate
                     return self.d
-                self.large = True
+                self.large = abs(missed) > self.limit
             cap = self.max_load if self.large else self.limit
             residual = missed - self._load
             self._trend += self.beta / self.Te * residual
