@@ -1,3 +1,3 @@
-from .cli import console
+from ledsim.cli import console
 
 console()

@@ -14,12 +14,11 @@ import math
 from dataclasses import asdict, dataclass, field, replace
 from typing import TYPE_CHECKING, Protocol
 
-from .errors import LedsimError, check_ranges
+from ledsim.errors import LedsimError, check_ranges
 
 if TYPE_CHECKING:  # imported where used: the CLI starts before numpy (thread pinning)
+    from ledsim.layout import ReceiverLayout
     from observer.noise import MeasurementNoise
-
-    from .layout import ReceiverLayout
 
 #: The paper's link distance d0 [m]: the default everywhere, and the distance of the
 #: shipped MuJoCo bank that serves every other.
@@ -149,7 +148,7 @@ class LinkConstants:
     @functools.cached_property  # read on every model call: once per instance
     def layout(self) -> ReceiverLayout:
         """The receiver: the paper's pair of photodiodes, Delta phi apart, on one axis."""
-        from .layout import paper_layout
+        from ledsim.layout import paper_layout
 
         return paper_layout(self.dphi)
 

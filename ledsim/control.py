@@ -16,8 +16,8 @@ from typing import Protocol
 
 import numpy as np
 
-from .config import LinkConstants
-from .optics import receiver_response
+from ledsim.config import LinkConstants
+from ledsim.optics import receiver_response
 
 
 class ControlLaw(Protocol):

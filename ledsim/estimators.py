@@ -24,13 +24,12 @@ import math
 from dataclasses import dataclass
 from pathlib import Path
 
+from ledsim.errors import LedsimError
 from observer import checkpoint as ckpt
 from observer.baselines import ExtendedKalmanFilter, ParticleFilter, UnscentedKalmanFilter
 from observer.estimator import Estimator
 from observer.handover import HandoverKKL
 from observer.system import DiscreteSystem
-
-from .errors import LedsimError
 
 
 @dataclass(frozen=True)

@@ -22,7 +22,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from .errors import LedsimError
+from ledsim.errors import LedsimError
 
 
 class LayoutError(LedsimError):

@@ -27,9 +27,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from ledsim.results import DictAccess
 from observer.noise import MeasurementNoise
-
-from .results import DictAccess
 
 #: Data rate of the link [bit/s]. The paper's measurement noise (sigma = 0.032 W on a
 #: 1 W peak, 30 dB over one 50 Hz sample) sets the scale: at 1 kbit/s an aligned link

@@ -22,9 +22,9 @@ from typing import TypeVar
 
 from tqdm.auto import tqdm
 
-from .errors import LedsimError
-from .outputs import check_interrupt
-from .workers import RemoteTraceback, WorkerDied, Workers  # noqa: F401 (re-exported)
+from ledsim.errors import LedsimError
+from ledsim.outputs import check_interrupt
+from ledsim.workers import RemoteTraceback, WorkerDied, Workers  # noqa: F401 (re-exported)
 
 #: One BLAS/OpenMP thread per process, so that N workers use N cores. Effective only
 #: when set before numpy loads (Ray: its runtime environment; the CLI, the scripts:

@@ -14,9 +14,8 @@ import math
 
 import numpy as np
 
+from ledsim.config import LinkConstants, ReceiverResponse
 from observer.rowops import FLOATS
-
-from .config import LinkConstants, ReceiverResponse
 
 
 def response_terms(phi, r: ReceiverResponse, exp=np.exp):

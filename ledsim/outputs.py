@@ -13,7 +13,7 @@ from collections.abc import Iterator
 from contextlib import contextmanager
 from pathlib import Path
 
-from .errors import LedsimError
+from ledsim.errors import LedsimError
 
 #: Set by a command-line SIGINT handler. Python ignores a KeyboardInterrupt raised inside
 #: some callbacks (an import lock's weakref callback, for one), so the work may carry on:

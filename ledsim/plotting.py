@@ -10,7 +10,7 @@ from pathlib import Path
 
 import numpy as np
 
-from .outputs import atomic_write_bytes
+from ledsim.outputs import atomic_write_bytes
 
 
 def _subplots(nrows: int, ncols: int, figsize, **kw):

@@ -12,7 +12,7 @@ from observer.kkl import KKLDesign
 if TYPE_CHECKING:  # torch is imported only when training
     from observer.training import TrainingConfig
 
-from .errors import LedsimError
+from ledsim.errors import LedsimError
 
 #: Names accepted by :func:`observer_preset` (``ledsim train --design``).
 PRESETS = ("default", "low-light", "slow", "deep", "paper", "scheduled")

@@ -10,7 +10,7 @@ from __future__ import annotations
 from importlib.resources import files
 from pathlib import Path
 
-from .errors import LedsimError
+from ledsim.errors import LedsimError
 
 
 def scene_path() -> Path:

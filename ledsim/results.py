@@ -14,7 +14,7 @@ from pathlib import Path
 
 import numpy as np
 
-from .outputs import atomic_write_text
+from ledsim.outputs import atomic_write_text
 
 
 def to_jsonable(obj):

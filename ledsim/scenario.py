@@ -8,8 +8,8 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 
-from .config import LinkConstants
-from .control import ControlLaw
+from ledsim.config import LinkConstants
+from ledsim.control import ControlLaw
 
 
 @dataclass(frozen=True)

@@ -40,10 +40,9 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from ledsim.config import LinkConstants
+from ledsim.control import ControlLaw
 from observer.gimbal_load import LoadObserver
-
-from .config import LinkConstants
-from .control import ControlLaw
 
 __all__ = ["ControlStep", "Decision", "DirectInput", "GimbalMotor", "LoadObserver",
            "Unsupervised", "identity_gate"]

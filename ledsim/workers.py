@@ -20,7 +20,7 @@ import traceback
 from collections.abc import Callable
 from multiprocessing.connection import wait
 
-from .outputs import deferred_sigint
+from ledsim.outputs import deferred_sigint
 
 #: Seconds a worker gets to end after SIGTERM (or, its jobs done, after being told to
 #: stop) before SIGKILL: part of the 2 s in which Ctrl-C ends a ``ledsim`` command.

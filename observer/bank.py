@@ -14,8 +14,8 @@ import math
 
 import numpy as np
 
-from .errors import ObserverError
-from .estimator import Estimator
+from observer.errors import ObserverError
+from observer.estimator import Estimator
 
 
 class ObserverBank(Estimator):

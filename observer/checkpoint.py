@@ -18,8 +18,8 @@ from pathlib import Path
 
 import numpy as np
 
-from . import scheduled_checkpoint
-from .checkpoint_io import (  # noqa: F401 (re-exported)
+from observer import scheduled_checkpoint
+from observer.checkpoint_io import (  # noqa: F401 (re-exported)
     FORMAT,
     SUFFIX,
     CheckpointError,
@@ -32,10 +32,10 @@ from .checkpoint_io import (  # noqa: F401 (re-exported)
     target,
     write,
 )
-from .kkl import KKLObserver
-from .nets import NumpyMLP
-from .scheduled import ScheduledKKL
-from .system import DiscreteSystem
+from observer.kkl import KKLObserver
+from observer.nets import NumpyMLP
+from observer.scheduled import ScheduledKKL
+from observer.system import DiscreteSystem
 
 #: Checkpoint files whose contents a process keeps (:func:`_read_shared`).
 MAX_CACHED = 16

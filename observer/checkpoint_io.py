@@ -21,8 +21,8 @@ from typing import NamedTuple
 
 import numpy as np
 
-from . import scheduled_checkpoint
-from .errors import ObserverError
+from observer import scheduled_checkpoint
+from observer.errors import ObserverError
 
 FORMAT = "ledsim-kkl/1"
 #: The formats a checkpoint's header may name.

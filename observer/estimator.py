@@ -17,7 +17,7 @@ from abc import ABC, abstractmethod
 
 import numpy as np
 
-from .system import DiscreteSystem
+from observer.system import DiscreteSystem
 
 
 class Estimator(ABC):

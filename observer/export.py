@@ -26,9 +26,9 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from .errors import ObserverError
-from .kkl import KKLObserver
-from .nets import NumpyMLP
+from observer.errors import ObserverError
+from observer.kkl import KKLObserver
+from observer.nets import NumpyMLP
 
 OPSET = 17
 

@@ -8,8 +8,8 @@ import math
 
 import numpy as np
 
-from .fading import FadingChannel
-from .system import DiscreteSystem
+from observer.fading import FadingChannel
+from observer.system import DiscreteSystem
 
 
 class GainTracker:

@@ -13,9 +13,9 @@ from __future__ import annotations
 
 import numpy as np
 
-from .errors import ObserverError
-from .estimator import Estimator
-from .kkl import KKLObserver
+from observer.errors import ObserverError
+from observer.estimator import Estimator
+from observer.kkl import KKLObserver
 
 
 class HandoverKKL(Estimator):

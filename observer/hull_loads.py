@@ -14,7 +14,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from .rows import Rows
+from observer.rows import Rows
 
 
 def soft_deadband(square, variance, k: float):

@@ -45,12 +45,12 @@ from collections import deque
 
 import numpy as np
 
-from .ins_aiding import BA, BG, FIX_GATE, N_ERROR, TH, InsAiding, P, V
-from .ins_state import InertialNoise, InsState
-from .rotations import rotation_exp, rotation_log, skew
-from .rows import Rows
-from .rows import matvec as _mv
-from .rows import transposed as _T
+from observer.ins_aiding import BA, BG, FIX_GATE, N_ERROR, TH, InsAiding, P, V
+from observer.ins_state import InertialNoise, InsState
+from observer.rotations import rotation_exp, rotation_log, skew
+from observer.rows import Rows
+from observer.rows import matvec as _mv
+from observer.rows import transposed as _T
 
 
 class AidedINS(InsAiding, Rows):

@@ -8,9 +8,9 @@ from __future__ import annotations
 
 import numpy as np
 
-from .rotations import libm_square, rotation_exp, skew
-from .rows import matvec as _mv
-from .rows import transposed as _T
+from observer.rotations import libm_square, rotation_exp, skew
+from observer.rows import matvec as _mv
+from observer.rows import transposed as _T
 
 #: Error-state blocks: position, velocity, attitude, gyro bias, accelerometer bias.
 P, V, TH, BG, BA = (slice(0, 3), slice(3, 6), slice(6, 9), slice(9, 12), slice(12, 15))

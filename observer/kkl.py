@@ -15,10 +15,10 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from .errors import ObserverError
-from .estimator import Estimator, usable_mask
-from .nets import NumpyMLP
-from .system import DiscreteSystem
+from observer.errors import ObserverError
+from observer.estimator import Estimator, usable_mask
+from observer.nets import NumpyMLP
+from observer.system import DiscreteSystem
 
 
 @dataclass(frozen=True)

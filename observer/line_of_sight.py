@@ -24,8 +24,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from .rowops import columns, ops
-from .rows import Rows
+from observer.rowops import columns, ops
+from observer.rows import Rows
 
 
 @dataclass

@@ -11,7 +11,7 @@ import numpy as np
 import torch
 from torch import nn
 
-from .nets import NumpyMLP
+from observer.nets import NumpyMLP
 
 
 class TanhMLP(nn.Module):

@@ -11,8 +11,8 @@ from collections.abc import Callable
 
 import numpy as np
 
-from .estimator import Estimator
-from .system import DiscreteSystem
+from observer.estimator import Estimator
+from observer.system import DiscreteSystem
 
 
 class Oracle(Estimator):

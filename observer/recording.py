@@ -25,7 +25,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from .estimator import Estimator
+from observer.estimator import Estimator
 
 #: The recorded calls, by their index in ``call_kind``.
 CALLS = ("seed_run", "reset", "update", "predict", "adapt_noise")

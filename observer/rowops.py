@@ -17,7 +17,7 @@ from types import SimpleNamespace
 
 import numpy as np
 
-from .rotations import libm_square, per_element
+from observer.rotations import libm_square, per_element
 
 #: Plain floats (one row).
 FLOATS = SimpleNamespace(

@@ -28,10 +28,10 @@ import math
 
 import numpy as np
 
-from .estimator import Estimator, usable_mask
-from .gainmaps import GainTableMap
-from .scheduled_design import GainSchedule, ScheduledDesign
-from .system import DiscreteSystem
+from observer.estimator import Estimator, usable_mask
+from observer.gainmaps import GainTableMap
+from observer.scheduled_design import GainSchedule, ScheduledDesign
+from observer.system import DiscreteSystem
 
 __all__ = ["GainSchedule", "ScheduledDesign", "ScheduledKKL"]
 

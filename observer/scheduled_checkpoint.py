@@ -10,8 +10,8 @@ from __future__ import annotations
 
 import numpy as np
 
-from .gainmaps import GainTableMap
-from .scheduled import GainSchedule, ScheduledDesign, ScheduledKKL
+from observer.gainmaps import GainTableMap
+from observer.scheduled import GainSchedule, ScheduledDesign, ScheduledKKL
 
 FORMAT = "ledsim-kkl-scheduled/1"
 _MAPS = ("encoder_T", "decoder_T_star", "decoder_locked")

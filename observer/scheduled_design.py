@@ -8,7 +8,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from .errors import ObserverError
+from observer.errors import ObserverError
 
 
 @dataclass(frozen=True)

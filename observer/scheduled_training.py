@@ -21,12 +21,12 @@ from dataclasses import asdict, dataclass
 import numpy as np
 from tqdm.auto import tqdm
 
-from .errors import ObserverError
-from .fitting import ridge_solve
-from .gainmaps import GainTableMap
-from .kkl import stationary_noise_covariance
-from .scheduled import GainSchedule, ScheduledDesign, ScheduledKKL
-from .system import DiscreteSystem
+from observer.errors import ObserverError
+from observer.fitting import ridge_solve
+from observer.gainmaps import GainTableMap
+from observer.kkl import stationary_noise_covariance
+from observer.scheduled import GainSchedule, ScheduledDesign, ScheduledKKL
+from observer.system import DiscreteSystem
 
 
 @dataclass

@@ -21,8 +21,8 @@ import math
 
 import numpy as np
 
-from .estimator import usable_mask
-from .system import DiscreteSystem
+from observer.estimator import usable_mask
+from observer.system import DiscreteSystem
 
 
 class ResidualMonitor:

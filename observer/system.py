@@ -18,7 +18,7 @@ from abc import ABC, abstractmethod
 
 import numpy as np
 
-from .noise import MeasurementNoise
+from observer.noise import MeasurementNoise
 
 
 class DiscreteSystem(ABC):

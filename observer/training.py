@@ -25,11 +25,18 @@ import numpy as np
 import torch
 from tqdm.auto import tqdm
 
-from .errors import ObserverError
-from .fitting import adam, features, init_features, ridge_solve, set_output, solve_encoder_output
-from .kkl import KKLDesign, KKLObserver, stationary_noise_covariance
-from .maps import TanhMLP
-from .system import DiscreteSystem
+from observer.errors import ObserverError
+from observer.fitting import (
+    adam,
+    features,
+    init_features,
+    ridge_solve,
+    set_output,
+    solve_encoder_output,
+)
+from observer.kkl import KKLDesign, KKLObserver, stationary_noise_covariance
+from observer.maps import TanhMLP
+from observer.system import DiscreteSystem
 
 
 @dataclass

@@ -29,7 +29,7 @@ _PARSER_NAMES = ("CAMERAS", "EXIT_USAGE", "build_parser")
 def __getattr__(name: str):
     """The parser's names, re-exported; imported on first use (it loads the registries)."""
     if name in _PARSER_NAMES:
-        from . import parser
+        from ledsim.cli import parser
 
         return getattr(parser, name)
     raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
@@ -70,7 +70,7 @@ def _on_sigint(signum, frame) -> None:
     if _State.console and _State.phase == "done":
         _flush()
         os._exit(_State.code)
-    from ..outputs import INTERRUPTED
+    from ledsim.outputs import INTERRUPTED
 
     first = not INTERRUPTED.is_set()
     INTERRUPTED.set()
@@ -86,7 +86,7 @@ def _on_sigint(signum, frame) -> None:
 def _force_exit() -> None:
     import time
 
-    from ..outputs import discard_temporaries
+    from ledsim.outputs import discard_temporaries
 
     time.sleep(FORCE_EXIT_AFTER)
     discard_temporaries()  # waits for a rename into place under way, and allows no other
@@ -124,7 +124,7 @@ def _pin_threads(argv: list[str]) -> None:
     chose; only effective before numpy is first imported (``import ledsim.cli`` does not
     import it)."""
     if "train" not in argv[:1] and "numpy" not in sys.modules:
-        from ..montecarlo import pin_blas_threads
+        from ledsim.montecarlo import pin_blas_threads
 
         pin_blas_threads()
 
@@ -153,7 +153,7 @@ def main(argv: list[str] | None = None) -> int:
         interrupted (Ctrl-C: nothing was written).
     """
     argv = sys.argv[1:] if argv is None else list(argv)
-    from ..outputs import INTERRUPTED
+    from ledsim.outputs import INTERRUPTED
 
     INTERRUPTED.clear()
     previous = signal.getsignal(signal.SIGINT)
@@ -183,11 +183,10 @@ def main(argv: list[str] | None = None) -> int:
 def _main(argv: list[str]) -> int:
     _gl_from_argv(argv)
     _pin_threads([a for a in argv if not a.startswith("-")])
+    from ledsim.cli import commands
+    from ledsim.cli.parser import EXIT_USAGE, build_parser
+    from ledsim.errors import LedsimError
     from observer.errors import ObserverError
-
-    from ..errors import LedsimError
-    from . import commands
-    from .parser import EXIT_USAGE, build_parser
 
     parser = build_parser()
     if not argv:  # bare ``ledsim``: say what it takes
@@ -202,9 +201,9 @@ def _main(argv: list[str]) -> int:
 def _dispatch(commands, args, user_errors: tuple) -> int:
     import logging
 
-    from ..errors import one_line
-    from ..outputs import INTERRUPTED
-    from .parser import EXIT_USAGE
+    from ledsim.cli.parser import EXIT_USAGE
+    from ledsim.errors import one_line
+    from ledsim.outputs import INTERRUPTED
 
     # Results go to stdout; progress bars (tqdm) and diagnostics (logging) to stderr.
     logging.basicConfig(format="ledsim: %(message)s",

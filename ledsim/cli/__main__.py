@@ -1,3 +1,3 @@
-from . import console
+from ledsim.cli import console
 
 console()

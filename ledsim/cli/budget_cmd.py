@@ -6,15 +6,15 @@ from __future__ import annotations
 import json
 import logging
 
-from ..results import to_jsonable
+from ledsim.results import to_jsonable
 
 log = logging.getLogger("ledsim")
 
 
 def budget(args) -> int:
     """Print the link budget (a table, or ``--json``) and write ``--plot``."""
-    from ..outputs import atomic_write_bytes, check_out_file
-    from ..radiometry.budget import budget_report, format_budget, plot_budget
+    from ledsim.outputs import atomic_write_bytes, check_out_file
+    from ledsim.radiometry.budget import budget_report, format_budget, plot_budget
 
     plot = check_out_file(args.plot, ".png", "--plot") if args.plot else None
     report = budget_report(args.link, args.water, args.attenuation, args.bit_rate,

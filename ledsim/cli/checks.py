@@ -5,7 +5,7 @@ from __future__ import annotations
 
 import logging
 
-from ..errors import LedsimError
+from ledsim.errors import LedsimError
 
 log = logging.getLogger("ledsim")
 
@@ -25,7 +25,7 @@ def _check_vehicle(cfg) -> None:
     once with ``--no-imu`` (the run then has no station keeping)."""
     if cfg.scene is None:
         return
-    from ..physics.world import LinkWorld
+    from ledsim.physics.world import LinkWorld
 
     ids = LinkWorld(cfg.world_config()).ids
     if ids.vehicle_sensors is not None:
@@ -44,8 +44,8 @@ def _warn_saturated(cfg) -> None:
     the full scale of its digitiser, so the aligned samples clip there, and the
     estimators, whose model has no clipping, read a clipped pair of powers as an angle
     off the peak (a biased phi)."""
-    from ..loop.estimation import saturates
-    from ..optics import peak_power
+    from ledsim.loop.estimation import saturates
+    from ledsim.optics import peak_power
 
     if saturates(cfg):
         c = cfg.world_config().constants
@@ -62,8 +62,8 @@ def _warn_unserved(cfg) -> None:
     """Say so when the shipped KKL runs at a distance it is not measured to serve, when
     the link is too weak for the minimum-time acquisition it asks for, and when the
     receiver saturates (:func:`_warn_saturated`)."""
-    from ..loop.estimation import SERVED_DISTANCES, served
-    from ..loop.registry import PHYSICS_SCENARIOS
+    from ledsim.loop.estimation import SERVED_DISTANCES, served
+    from ledsim.loop.registry import PHYSICS_SCENARIOS
 
     _warn_saturated(cfg)
 

@@ -12,13 +12,13 @@ import os
 import time
 from pathlib import Path
 
-from ..errors import LedsimError
-from ..outputs import check_out_dir, check_out_file, output_folder, save_checkpoint
-from .budget_cmd import budget  # noqa: F401 (the budget command)
-from .checks import _check_vehicle, _vehicle, _warn_saturated, _warn_unserved
-from .export_cmd import export  # noqa: F401 (the export command)
-from .groups import resolved_distance
-from .replay_cmd import replay  # noqa: F401 (the replay command)
+from ledsim.cli.budget_cmd import budget  # noqa: F401 (the budget command)
+from ledsim.cli.checks import _check_vehicle, _vehicle, _warn_saturated, _warn_unserved
+from ledsim.cli.export_cmd import export  # noqa: F401 (the export command)
+from ledsim.cli.groups import resolved_distance
+from ledsim.cli.replay_cmd import replay  # noqa: F401 (the replay command)
+from ledsim.errors import LedsimError
+from ledsim.outputs import check_out_dir, check_out_file, output_folder, save_checkpoint
 
 log = logging.getLogger("ledsim")
 
@@ -28,7 +28,7 @@ def _loop_config(args, **given):
     part's own default for the flags a command does not take), validated."""
     from dataclasses import fields
 
-    from ..loop.config import PARTS, RunConfig
+    from ledsim.loop.config import PARTS, RunConfig
 
     values = {**vars(args), "disturbances": tuple(args.disturbance),
               "supervision": not args.no_supervision, **_vehicle(args), **given}
@@ -49,13 +49,13 @@ def _link(args, distance: bool = True) -> dict:
 
 
 def simulate(args) -> int:
-    from ..config import LinkConstants
-    from ..physics.disturbances import check_sea, check_timing, parse_disturbance
-    from ..physics.scene import WorldConfig
-    from ..physics.sensor import IrradianceSensor
-    from ..physics.simulation import simulate, torque_profile
-    from ..physics.world import LinkWorld
-    from ..plotting import plot_series
+    from ledsim.config import LinkConstants
+    from ledsim.physics.disturbances import check_sea, check_timing, parse_disturbance
+    from ledsim.physics.scene import WorldConfig
+    from ledsim.physics.sensor import IrradianceSensor
+    from ledsim.physics.simulation import simulate, torque_profile
+    from ledsim.physics.world import LinkWorld
+    from ledsim.plotting import plot_series
 
     if not args.seconds > 0:
         raise LedsimError(f"--seconds {args.seconds!r} is not allowed: must be > 0")
@@ -65,7 +65,7 @@ def simulate(args) -> int:
     disturbances = [parse_disturbance(d) for d in args.disturbance]
     check_timing(disturbances, args.seconds)
     check_sea(disturbances, args.depth, args.transmitter_depth)
-    from ..radiometry.presets import link_constants
+    from ledsim.radiometry.presets import link_constants
 
     args.distance = resolved_distance(args)
     constants = link_constants(args.link, args.distance, args.water, args.attenuation,
@@ -97,8 +97,8 @@ def simulate(args) -> int:
 
 
 def run(args) -> int:
-    from ..loop.report import run_seeds, write_run, write_traces
-    from ..loop.table import TABLE_HEADER, format_summary
+    from ledsim.loop.report import run_seeds, write_run, write_traces
+    from ledsim.loop.table import TABLE_HEADER, format_summary
 
     cfg = _loop_config(args)
     out = check_out_dir(args.out)
@@ -122,13 +122,13 @@ def run(args) -> int:
 
 def demo(args) -> int:
     """Align the receiver from 0.3 rad off with each estimator; print one table."""
-    from ..loop.config import COMPARED_ESTIMATORS, RunConfig
-    from ..loop.estimation import check_checkpoint
-    from ..loop.report import run_many, write_run
-    from ..loop.table import TABLE_HEADER, format_summary
-    from ..loop.video import VideoSpec, check_video
-    from ..outputs import atomic_write_text
-    from ..results import write_json
+    from ledsim.loop.config import COMPARED_ESTIMATORS, RunConfig
+    from ledsim.loop.estimation import check_checkpoint
+    from ledsim.loop.report import run_many, write_run
+    from ledsim.loop.table import TABLE_HEADER, format_summary
+    from ledsim.loop.video import VideoSpec, check_video
+    from ledsim.outputs import atomic_write_text
+    from ledsim.results import write_json
 
     out = check_out_dir(args.out)
     t0 = time.perf_counter()
@@ -165,7 +165,7 @@ def _demo_video_config(scene: str | None, vehicle: dict, link: dict | None = Non
                        estimator: str = "kkl"):
     """The run of the demo's video: 5 s of the ``estimator``-driven alignment with an
     occlusion (on ``link``: default the paper's bench, whose 8.5 cm the cameras frame)."""
-    from ..loop.config import RunConfig
+    from ledsim.loop.config import RunConfig
 
     return RunConfig(scenario="align", estimator=estimator, seconds=5.0, scene=scene,
                      disturbances=("occlusion:start=3,duration=0.5",), **vehicle,
@@ -176,7 +176,7 @@ def _demo_video(out: Path, scene: str | None, progress: bool, vehicle: dict,
                 link: dict | None = None, estimator: str = "kkl") -> None:
     """A short video of the ``estimator``-driven alignment with an occlusion, and a still
     frame (:func:`_demo_video_config`)."""
-    from ..loop.video import VideoSpec, check_video, render_video
+    from ledsim.loop.video import VideoSpec, check_video, render_video
 
     cfg = _demo_video_config(scene, vehicle, link, estimator)
     check_video(cfg, VideoSpec())
@@ -192,7 +192,7 @@ def render(args) -> int:
         if not value > 0:
             raise LedsimError(f"{flag} {value!r} is not allowed: must be > 0")
     out = check_out_file(args.out, ".mp4")
-    from ..loop.video import VideoSpec, check_video, render_video
+    from ledsim.loop.video import VideoSpec, check_video, render_video
 
     cfg = _loop_config(args, seconds=args.seconds)
     _check_vehicle(cfg)
@@ -207,7 +207,7 @@ def render(args) -> int:
 
 
 def evaluate(args) -> int:
-    from ..paper.evaluate import EvaluationConfig, evaluate, markdown_table, write_outputs
+    from ledsim.paper.evaluate import EvaluationConfig, evaluate, markdown_table, write_outputs
 
     cfg = EvaluationConfig(scenario=args.scenario, distance=args.distance,
                            dphi=math.radians(args.dphi), seeds=args.seeds,
@@ -233,15 +233,15 @@ def train(args) -> int:
         raise LedsimError(f"--out {str(args.out)!r}: {str(out.with_suffix('.safetensors'))!r} "
                           "is a folder")
     if args.world == "mujoco":
-        from ..loop.training import train_mujoco_observer
+        from ledsim.loop.training import train_mujoco_observer
 
         obs, report, extra = train_mujoco_observer(args.distance, args.noise_scale,
                                                    args.design, args.samples, args.seed,
                                                    args.threads, progress=not args.quiet)
     else:
-        from ..config import LinkConstants
-        from ..paper.model import LEDLinkModel
-        from ..presets import train_preset
+        from ledsim.config import LinkConstants
+        from ledsim.paper.model import LEDLinkModel
+        from ledsim.presets import train_preset
 
         system = LEDLinkModel(LinkConstants(distance=args.distance))
         obs, report = train_preset(system, args.design or "default", args.samples,
@@ -255,9 +255,9 @@ def train(args) -> int:
 
 
 def sweep(args) -> int:
-    from ..loop.config import RunConfig
-    from ..loop.sweep import SweepGrid, run_sweep
-    from ..radiometry.presets import default_distance
+    from ledsim.loop.config import RunConfig
+    from ledsim.loop.sweep import SweepGrid, run_sweep
+    from ledsim.radiometry.presets import default_distance
 
     if args.address is not None and args.backend != "ray":
         raise LedsimError("--address needs --backend ray")

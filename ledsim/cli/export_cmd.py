@@ -5,9 +5,9 @@ from __future__ import annotations
 import logging
 from pathlib import Path
 
-from ..config import PAPER_DISTANCE
-from ..errors import LedsimError
-from ..outputs import check_out_file
+from ledsim.config import PAPER_DISTANCE
+from ledsim.errors import LedsimError
+from ledsim.outputs import check_out_file
 
 log = logging.getLogger("ledsim")
 
@@ -15,26 +15,25 @@ log = logging.getLogger("ledsim")
 def export(args) -> int:
     """One step of a KKL checkpoint (update with its missing-sample hold, predict with
     Omega, and the decoder) as an ONNX graph."""
+    from ledsim.estimators import build_estimator
+    from ledsim.outputs import atomic_write_bytes
+    from ledsim.radiometry.link import constants_from_dict
+    from ledsim.resources import require_shipped_checkpoint
     from observer import checkpoint
     from observer.export import kkl_step_graph
-
-    from ..estimators import build_estimator
-    from ..outputs import atomic_write_bytes
-    from ..radiometry.link import constants_from_dict
-    from ..resources import require_shipped_checkpoint
 
     out = check_out_file(args.out, ".onnx")
     path = args.checkpoint or require_shipped_checkpoint(PAPER_DISTANCE, "mujoco")
     saved = checkpoint.metadata(path)["system"]
     constants = constants_from_dict(saved["constants"])
     if saved.get("class") == "LEDLinkModel":
-        from ..paper.model import LEDLinkModel
+        from ledsim.paper.model import LEDLinkModel
 
         system = model = LEDLinkModel(constants)
     elif saved.get("class") == "GimbalSystem":
-        from ..loop.estimation import identified_model
-        from ..physics.scene import WorldConfig
-        from ..physics.system import GimbalSystem
+        from ledsim.loop.estimation import identified_model
+        from ledsim.physics.scene import WorldConfig
+        from ledsim.physics.system import GimbalSystem
 
         world = saved.get("world", {})
         system = GimbalSystem(WorldConfig(constants=constants, **{

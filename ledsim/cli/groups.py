@@ -3,7 +3,7 @@ its start, the vehicle, the loop)."""
 
 from __future__ import annotations
 
-from .options import (
+from ledsim.cli.options import (
     ATTENUATION,
     BIT_RATE,
     DEPTH,
@@ -30,8 +30,8 @@ def add_world_args(p, distance_help="link distance d [m] (default: 0.085 for --l
 def add_link_args(p, sea: bool = True) -> None:
     """The physical link: its preset, the water and the data's bit rate (and, with
     ``sea``, the vehicles' depths)."""
-    from ..radiometry.presets import DEFAULT_LINK, LINK_PRESETS
-    from ..radiometry.water import WATER_TYPES
+    from ledsim.radiometry.presets import DEFAULT_LINK, LINK_PRESETS
+    from ledsim.radiometry.water import WATER_TYPES
 
     p.add_argument("--link", default=DEFAULT_LINK, **choices(LINK_PRESETS),
                    help="the link: a real LED modem (docs/link.md), or paper: the "
@@ -44,7 +44,7 @@ def add_link_args(p, sea: bool = True) -> None:
                    help="the data's bit rate [bit/s] (default: the preset's; 1000 for the "
                    "paper's bench)")
     if sea:
-        from ..physics.scene import DEFAULT_DEPTH
+        from ledsim.physics.scene import DEFAULT_DEPTH
 
         p.add_argument("--depth", type=DEPTH, default=DEFAULT_DEPTH, metavar="D",
                        help="the receiver vehicle's depth below the still surface [m]: the "
@@ -58,17 +58,17 @@ def add_link_args(p, sea: bool = True) -> None:
 
 def resolved_distance(args) -> float:
     """``--distance``, or the ``--link`` preset's default distance [m]."""
-    from ..radiometry.presets import DEFAULT_LINK, default_distance
+    from ledsim.radiometry.presets import DEFAULT_LINK, default_distance
 
     d = getattr(args, "distance", None)
     return default_distance(getattr(args, "link", DEFAULT_LINK)) if d is None else d
 
 
 def add_scene_args(p) -> None:
-    from ..physics.scene import INTEGRATORS
+    from ledsim.physics.scene import INTEGRATORS
 
     p.add_argument("--scene", help="MJCF scene file (default: the shipped led_link.xml)")
-    from ..loop.config import WorldPart
+    from ledsim.loop.config import WorldPart
 
     p.add_argument("--integrator", default=WorldPart.integrator, **choices(INTEGRATORS),
                    help="MuJoCo integrator (docs/physics.md compares them)")
@@ -76,7 +76,7 @@ def add_scene_args(p) -> None:
 
 def add_run_knobs(p) -> None:
     """Knobs every run of ``run`` and ``sweep`` shares: length, particles, torque limit."""
-    from ..loop.config import EstimatorPart, WorldPart
+    from ledsim.loop.config import EstimatorPart, WorldPart
 
     p.add_argument("--torque-limit", type=TORQUE_LIMIT, default=WorldPart.torque_limit,
                    help="[N m]")
@@ -88,7 +88,7 @@ def add_run_knobs(p) -> None:
 
 def add_start_arg(p) -> None:
     """The run's start and acquisition (run, render, sweep)."""
-    from ..loop.config import ACQUISITIONS, MAX_INITIAL_ANGLE, TaskPart
+    from ledsim.loop.config import ACQUISITIONS, MAX_INITIAL_ANGLE, TaskPart
 
     p.add_argument("--acquisition", default=TaskPart.acquisition, **choices(ACQUISITIONS),
                    help="minimum-time (the default): fix the beam from the pair of "
@@ -122,8 +122,8 @@ def add_vehicle_args(p) -> None:
 
 
 def add_loop_args(p) -> None:
-    from ..loop.config import LOOP_ESTIMATORS, PHYSICS_SCENARIOS, EstimatorPart, TaskPart
-    from ..physics.disturbances import DISTURBANCES
+    from ledsim.loop.config import LOOP_ESTIMATORS, PHYSICS_SCENARIOS, EstimatorPart, TaskPart
+    from ledsim.physics.disturbances import DISTURBANCES
 
     p.add_argument("--scenario", default=TaskPart.scenario, **choices(PHYSICS_SCENARIOS),
                    help="closed-loop scenario")

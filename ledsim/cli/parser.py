@@ -6,8 +6,7 @@ from __future__ import annotations
 import argparse
 import math
 
-from ..config import PAPER_DISTANCE
-from .groups import (
+from ledsim.cli.groups import (
     add_link_args,
     add_loop_args,
     add_run_knobs,
@@ -17,7 +16,7 @@ from .groups import (
     add_world_args,
     choices,
 )
-from .options import (
+from ledsim.cli.options import (
     DISTANCE,
     DPHI_DEG,
     NOISE_SCALE,
@@ -28,6 +27,7 @@ from .options import (
     WORKERS,
     number,
 )
+from ledsim.config import PAPER_DISTANCE
 
 EXIT_USAGE = 2
 CAMERAS = ("side", "overview", "chase")  # the shipped scene's cameras
@@ -35,7 +35,7 @@ CAMERAS = ("side", "overview", "chase")  # the shipped scene's cameras
 
 class _Parser(argparse.ArgumentParser):
     def error(self, message):  # one line, no usage dump
-        from ..errors import one_line
+        from ledsim.errors import one_line
 
         self.exit(EXIT_USAGE, f"{self.prog}: error: {one_line(message)}\n")
 
@@ -61,18 +61,18 @@ class _Help(argparse.ArgumentDefaultsHelpFormatter):
 
 
 def build_parser() -> argparse.ArgumentParser:
-    from .. import __version__
-    from ..paper.evaluate import CLOSED_FORM_ESTIMATORS
-    from ..paper.scenarios import PAPER_SCENARIOS
-    from ..physics.simulation import TORQUE_PROFILES
-    from ..presets import PRESETS
+    from ledsim import __version__
+    from ledsim.paper.evaluate import CLOSED_FORM_ESTIMATORS
+    from ledsim.paper.scenarios import PAPER_SCENARIOS
+    from ledsim.physics.simulation import TORQUE_PROFILES
+    from ledsim.presets import PRESETS
 
     p = _Parser(prog="ledsim", description="An underwater LED optical link in MuJoCo, kept "
                 "aligned by a learned KKL observer. User mistakes exit with code 2.")
-    from ..loop.config import EstimatorPart as E
-    from ..loop.config import ExecutionPart as X
-    from ..loop.config import TaskPart as T
-    from ..loop.config import WorldPart as W
+    from ledsim.loop.config import EstimatorPart as E
+    from ledsim.loop.config import ExecutionPart as X
+    from ledsim.loop.config import TaskPart as T
+    from ledsim.loop.config import WorldPart as W
 
     p.add_argument("--version", action="version", version=f"ledsim {__version__}")
     sub = p.add_subparsers(dest="command", required=True, parser_class=_Parser)
@@ -160,7 +160,7 @@ def build_parser() -> argparse.ArgumentParser:
                      help="[N m]")
     sim.add_argument("--torque-frequency", type=number(0.0, 50.0, "Hz", lo_open=True),
                      default=0.5, help="[Hz]")
-    from ..physics.disturbances import DISTURBANCES
+    from ledsim.physics.disturbances import DISTURBANCES
 
     sim.add_argument("--disturbance", action="append", default=[], metavar="SPEC",
                      help="name[:key=value,...] with name in " + ", ".join(DISTURBANCES)
@@ -226,8 +226,8 @@ def build_parser() -> argparse.ArgumentParser:
 
     sw = command("sweep", "a grid of closed-loop runs (estimators x disturbances x "
                  "distances x noise scales x seeds), locally or on a Ray cluster")
-    from ..loop.config import LOOP_ESTIMATORS, PHYSICS_SCENARIOS
-    from ..loop.sweep import BACKENDS
+    from ledsim.loop.config import LOOP_ESTIMATORS, PHYSICS_SCENARIOS
+    from ledsim.loop.sweep import BACKENDS
     sw.add_argument("--estimator", action="append", choices=list(LOOP_ESTIMATORS),
                     metavar="{" + ",".join(LOOP_ESTIMATORS) + "}",
                     help="estimator (repeatable; default: kkl)")

@@ -4,13 +4,13 @@ from __future__ import annotations
 
 import json
 
-from ..results import to_jsonable
+from ledsim.results import to_jsonable
 
 
 def replay(args) -> int:
     """Replay TRACE (``ledsim run --save-trace``) and print the largest difference of
     the replayed estimates from the run's."""
-    from ..loop.replay import replay as run_replay
+    from ledsim.loop.replay import replay as run_replay
 
     result = run_replay(args.trace, args.onnx)
     if args.json:

@@ -21,8 +21,8 @@ A new version for the new default, as Gymnasium's convention asks when results c
 
 from gymnasium.envs.registration import register, registry
 
-from .link_align import LinkAlignEnv
-from .policy import EstimatorObservation, ShippedAlignmentPolicy
+from ledsim.envs.link_align import LinkAlignEnv
+from ledsim.envs.policy import EstimatorObservation, ShippedAlignmentPolicy
 
 ENV_ID = "ledsim/LinkAlign-v0"
 #: The env on a physical link (``ledsim run``'s default link).

@@ -59,16 +59,16 @@ import numpy as np
 from gymnasium import spaces
 from gymnasium.utils import EzPickle
 
-from ..config import MIN_DISTANCE, LinkConstants
-from ..control import receiver_peak
-from ..loop.closed_loop import start_world
-from ..loop.config import MAX_INITIAL_ANGLE, EstimatorPart, RunConfig, TaskPart, WorldPart
-from ..loop.estimation import run_noise
-from ..optics import IMPOSSIBLE_SIGMAS, achievable_power, peak_power
-from ..physics.sensor import SensorReading
-from ..physics.system import GimbalSystem
-from ..physics.tick import prepare
-from ..radiometry.presets import link_constants
+from ledsim.config import MIN_DISTANCE, LinkConstants
+from ledsim.control import receiver_peak
+from ledsim.loop.closed_loop import start_world
+from ledsim.loop.config import MAX_INITIAL_ANGLE, EstimatorPart, RunConfig, TaskPart, WorldPart
+from ledsim.loop.estimation import run_noise
+from ledsim.optics import IMPOSSIBLE_SIGMAS, achievable_power, peak_power
+from ledsim.physics.sensor import SensorReading
+from ledsim.physics.system import GimbalSystem
+from ledsim.physics.tick import prepare
+from ledsim.radiometry.presets import link_constants
 
 #: Bounds of the vehicle's readings in the observation (indices 2-6): gyro z [rad/s],
 #: DVL x, y [m/s], encoder [rad], LOS rate [rad/s].
@@ -282,7 +282,7 @@ class LinkAlignEnv(gym.Env, EzPickle):
         if self.render_mode != "rgb_array":
             return None
         if self._recorder is None:
-            from ..physics.render import FrameRecorder
+            from ledsim.physics.render import FrameRecorder
 
             w, h, cam = self._render_args
             self._recorder = FrameRecorder(self.world, w, h, self.metadata["render_fps"], cam,

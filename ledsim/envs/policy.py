@@ -9,10 +9,10 @@ import gymnasium as gym
 import numpy as np
 from gymnasium import spaces
 
-from ..loop.closed_loop import control_step, dropout_gate, run_supervisor
-from ..loop.estimation import identified_model_of
-from ..step import GimbalMotor
-from .link_align import LinkAlignEnv
+from ledsim.envs.link_align import LinkAlignEnv
+from ledsim.loop.closed_loop import control_step, dropout_gate, run_supervisor
+from ledsim.loop.estimation import identified_model_of
+from ledsim.step import GimbalMotor
 
 
 def torque_action(torque: float, limit: float) -> float:

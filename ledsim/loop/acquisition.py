@@ -21,8 +21,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from ..config import LinkConstants
-from ..optics import receiver_response
+from ledsim.config import LinkConstants
+from ledsim.optics import receiver_response
 
 
 @dataclass

@@ -2,7 +2,7 @@
 steps any number of seeds together, and :func:`run_batch` is kept here under its
 older path."""
 
-from .closed_loop import ClosedLoop, run_batch
+from ledsim.loop.closed_loop import ClosedLoop, run_batch
 
 #: Older name of :class:`~ledsim.loop.closed_loop.ClosedLoop`.
 BatchedClosedLoop = ClosedLoop

@@ -6,8 +6,8 @@ from __future__ import annotations
 import math
 from collections import deque
 
-from ..config import LinkConstants
-from ..optics import pair_phi_variance, pair_shape_inverse
+from ledsim.config import LinkConstants
+from ledsim.optics import pair_phi_variance, pair_shape_inverse
 
 __all__ = ["BeamFix"]
 

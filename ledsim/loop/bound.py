@@ -18,9 +18,8 @@ from __future__ import annotations
 
 import numpy as np
 
+from ledsim.optics import layout_power_jacobian, transmitter_gain
 from observer.pcrb import bound_against, box_prior, process_information, trajectory_terms
-
-from ..optics import layout_power_jacobian, transmitter_gain
 
 
 def run_terms(res, u: np.ndarray, measured: np.ndarray, model, constants, noise) -> dict:

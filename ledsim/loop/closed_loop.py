@@ -21,36 +21,35 @@ from collections.abc import Callable, Sequence
 import numpy as np
 from tqdm.auto import tqdm
 
-from observer.noise import MeasurementNoise
-from observer.oracle import Oracle
-from observer.recording import RecordingEstimator
-
-from ..control import intensity_maximum
-from ..montecarlo import report_progress
-from ..optics import nominal_noise_std, peak_power
-from ..physics.disturbances import parse_disturbance
-from ..physics.sensor import SensorReading
-from ..physics.sensor_rows import SensorRows
-from ..physics.simulation import SimulationResult
-from ..physics.system import GimbalSystem
-from ..physics.tick import PhysicsPass, step_worlds
-from ..physics.vehicle import Vehicle
-from ..physics.world import LinkWorld
-from ..step import ControlStep, GimbalMotor, Unsupervised
-from .config import RunConfig
-from .estimation import (  # noqa: F401 (re-exported)
+from ledsim.control import intensity_maximum
+from ledsim.loop.config import RunConfig
+from ledsim.loop.estimation import (  # noqa: F401 (re-exported)
     check_checkpoint,
     identified_model,
     loop_checkpoint,
     loop_estimator,
     run_noise,
 )
-from .gate import DropoutGate
-from .given import GivenRecord
-from .outcome import Navigation, RunOutcome, RunRecord, Trace, achievable_power, outcome  # noqa: F401
-from .slew import TimeOptimalSlew
-from .start import Surroundings, start_world  # noqa: F401 (re-exported)
-from .supervisor import LinkSupervisor
+from ledsim.loop.gate import DropoutGate
+from ledsim.loop.given import GivenRecord
+from ledsim.loop.outcome import Navigation, RunOutcome, RunRecord, Trace, achievable_power, outcome  # noqa: F401
+from ledsim.loop.slew import TimeOptimalSlew
+from ledsim.loop.start import Surroundings, start_world  # noqa: F401 (re-exported)
+from ledsim.loop.supervisor import LinkSupervisor
+from ledsim.montecarlo import report_progress
+from ledsim.optics import nominal_noise_std, peak_power
+from ledsim.physics.disturbances import parse_disturbance
+from ledsim.physics.sensor import SensorReading
+from ledsim.physics.sensor_rows import SensorRows
+from ledsim.physics.simulation import SimulationResult
+from ledsim.physics.system import GimbalSystem
+from ledsim.physics.tick import PhysicsPass, step_worlds
+from ledsim.physics.vehicle import Vehicle
+from ledsim.physics.world import LinkWorld
+from ledsim.step import ControlStep, GimbalMotor, Unsupervised
+from observer.noise import MeasurementNoise
+from observer.oracle import Oracle
+from observer.recording import RecordingEstimator
 
 #: Steps between two reports of a run's progress (montecarlo.report_progress).
 REPORT_EVERY = 50

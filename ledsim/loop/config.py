@@ -5,13 +5,8 @@ from __future__ import annotations
 
 from dataclasses import asdict, dataclass, fields, replace
 
-from ..config import NavigationNoise
-from ..physics.disturbances import parse_disturbance
-from ..physics.scene import DEFAULT_DEPTH, WorldConfig
-from ..physics.vehicle import StationKeeping
-from ..radiometry.presets import default_distance, link_constants, preset_named
-from ..scenario import Scenario
-from .registry import (  # noqa: F401 (re-exported)
+from ledsim.config import NavigationNoise
+from ledsim.loop.registry import (  # noqa: F401 (re-exported)
     ACQUISITIONS,
     COMPARED_ESTIMATORS,
     FILTER_DISTANCES,
@@ -22,12 +17,17 @@ from .registry import (  # noqa: F401 (re-exported)
     PHYSICS_SCENARIOS,
     peak_snr,
 )
-from .validation import (  # noqa: F401
+from ledsim.loop.validation import (  # noqa: F401
     keeping_gains,
     navigation_noise,
     run_from_dict,
     validate_run,
 )
+from ledsim.physics.disturbances import parse_disturbance
+from ledsim.physics.scene import DEFAULT_DEPTH, WorldConfig
+from ledsim.physics.vehicle import StationKeeping
+from ledsim.radiometry.presets import default_distance, link_constants, preset_named
+from ledsim.scenario import Scenario
 
 
 @dataclass(frozen=True)

@@ -16,18 +16,17 @@ import json
 from dataclasses import dataclass, replace
 from pathlib import Path
 
+from ledsim.config import PAPER_DISTANCE
+from ledsim.estimators import LOOP_KKL_ESTIMATORS, build_estimator
+from ledsim.loop.config import RunConfig
+from ledsim.optics import peak_power, receiver_saturates
+from ledsim.physics.scene import WorldConfig
+from ledsim.physics.system import GimbalSystem, IdentifiedGimbalModel
+from ledsim.radiometry.presets import kkl_reference_constants, preset_named
+from ledsim.resources import require_shipped_checkpoint
 from observer import checkpoint as ckpt
 from observer.bank import ObserverBank
 from observer.noise import MeasurementNoise
-
-from ..config import PAPER_DISTANCE
-from ..estimators import LOOP_KKL_ESTIMATORS, build_estimator
-from ..optics import peak_power, receiver_saturates
-from ..physics.scene import WorldConfig
-from ..physics.system import GimbalSystem, IdentifiedGimbalModel
-from ..radiometry.presets import kkl_reference_constants, preset_named
-from ..resources import require_shipped_checkpoint
-from .config import RunConfig
 
 #: Distance [m] of the shipped MuJoCo KKL bank that serves every distance.
 REFERENCE_DISTANCE = PAPER_DISTANCE

@@ -10,8 +10,8 @@ import math
 
 import numpy as np
 
-from ..config import LinkConstants
-from ..optics import peak_power
+from ledsim.config import LinkConstants
+from ledsim.optics import peak_power
 
 
 class DropoutGate:

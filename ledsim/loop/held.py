@@ -13,7 +13,7 @@ from collections import deque
 
 import numpy as np
 
-from ..step import Decision
+from ledsim.step import Decision
 
 #: Standard deviation of a fast acquisition's re-seeded phidot [rad/s]: the encoder's
 #: rate, off by the hull's own turning that the line of sight does not remove.

@@ -5,16 +5,15 @@ from __future__ import annotations
 
 import numpy as np
 
-from observer.gain_tracking import GainTracker
-
-from ..config import LinkConstants
-from ..optics import (
+from ledsim.config import LinkConstants
+from ledsim.optics import (
     layout_power,
     nominal_noise_std,
     pair_phi_variance,
     pair_shape_inverse,
     peak_power,
 )
+from observer.gain_tracking import GainTracker
 
 
 def model_gain(model, constants: LinkConstants) -> float:

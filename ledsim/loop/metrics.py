@@ -7,15 +7,14 @@ from dataclasses import asdict, dataclass, field
 
 import numpy as np
 
+from ledsim.config import LinkConstants
+from ledsim.control import intensity_maximum
+from ledsim.linkbudget import BIT_RATE, link_budget_of
+from ledsim.loop.losses import StepFlags, step_flags
+from ledsim.optics import peak_power
+from ledsim.results import DictAccess
 from observer.metrics import pointing_loss_db, rmse
 from observer.noise import MeasurementNoise
-
-from ..config import LinkConstants
-from ..control import intensity_maximum
-from ..linkbudget import BIT_RATE, link_budget_of
-from ..optics import peak_power
-from ..results import DictAccess
-from .losses import StepFlags, step_flags
 
 ALIGN_TOLERANCE = math.radians(1.0)  # |phi - phi_ref| below this counts as aligned [rad]
 #: The link is available while P1 >= 90% of its maximum: a pointing loss of at most

@@ -7,18 +7,17 @@ from typing import NamedTuple
 
 import numpy as np
 
+from ledsim import optics
+from ledsim.config import LinkConstants
+from ledsim.control import receiver_peak
+from ledsim.layout import ReceiverLayout
+from ledsim.linkbudget import BIT_RATE
+from ledsim.loop.bound import run_terms
+from ledsim.loop.config import RunConfig
+from ledsim.loop.metrics import RunMetrics, availability_mask, run_metrics, step_flags
+from ledsim.loop.windows import WindowMetrics, horizontal_rms, window_metrics
+from ledsim.results import DictAccess
 from observer.pcrb import BoundError
-
-from .. import optics
-from ..config import LinkConstants
-from ..control import receiver_peak
-from ..layout import ReceiverLayout
-from ..linkbudget import BIT_RATE
-from ..results import DictAccess
-from .bound import run_terms
-from .config import RunConfig
-from .metrics import RunMetrics, availability_mask, run_metrics, step_flags
-from .windows import WindowMetrics, horizontal_rms, window_metrics
 
 
 @dataclass

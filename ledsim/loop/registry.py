@@ -14,12 +14,12 @@ from __future__ import annotations
 
 import functools
 
-from ..config import LinkConstants
-from ..control import AlignmentPID, Excitation, PaperRateDamping
-from ..estimators import COMPARED_ESTIMATORS as COMPARED_ESTIMATORS  # alias, see below
-from ..estimators import LOOP_ESTIMATORS as LOOP_ESTIMATORS
-from ..optics import nominal_noise_std, peak_power
-from ..scenario import Scenario
+from ledsim.config import LinkConstants
+from ledsim.control import AlignmentPID, Excitation, PaperRateDamping
+from ledsim.estimators import COMPARED_ESTIMATORS as COMPARED_ESTIMATORS  # alias, see below
+from ledsim.estimators import LOOP_ESTIMATORS as LOOP_ESTIMATORS
+from ledsim.optics import nominal_noise_std, peak_power
+from ledsim.scenario import Scenario
 
 PHYSICS_SCENARIOS = {
     s.name: s for s in (

@@ -20,13 +20,12 @@ from pathlib import Path
 
 import numpy as np
 
+from ledsim.errors import LedsimError
+from ledsim.loop.config import RunConfig
+from ledsim.results import DictAccess
 from observer.errors import ObserverError
 from observer.kkl import KKLObserver
 from observer.recording import CALLS, difference, replay_calls
-
-from ..errors import LedsimError
-from ..results import DictAccess
-from .config import RunConfig
 
 #: What a replayable trace must hold: each array's dtype kinds (numpy's ``dtype.kind``)
 #: and number of dimensions.
@@ -202,8 +201,8 @@ def trace_config(arrays: dict[str, np.ndarray], path: str | Path | None = None) 
 
 def run_estimator(cfg: RunConfig):
     """A fresh estimator of the run ``cfg`` (its checkpoint, its identified model)."""
-    from ..physics.system import GimbalSystem
-    from .estimation import identified_model, loop_estimator
+    from ledsim.loop.estimation import identified_model, loop_estimator
+    from ledsim.physics.system import GimbalSystem
 
     system = GimbalSystem(cfg.world_config())
     est, _ = loop_estimator(cfg, system, identified_model(system))

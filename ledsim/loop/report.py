@@ -10,15 +10,14 @@ from pathlib import Path
 
 import numpy as np
 
+from ledsim.loop.bound import bound_summary
+from ledsim.loop.closed_loop import RunOutcome, Trace, check_checkpoint, run_batch
+from ledsim.loop.config import RunConfig
+from ledsim.loop.estimation import saturates, served
+from ledsim.montecarlo import run_jobs
+from ledsim.outputs import atomic_write_bytes
+from ledsim.results import DictAccess, write_json
 from observer.metrics import mean_and_spread
-
-from ..montecarlo import run_jobs
-from ..outputs import atomic_write_bytes
-from ..results import DictAccess, write_json
-from .bound import bound_summary
-from .closed_loop import RunOutcome, Trace, check_checkpoint, run_batch
-from .config import RunConfig
-from .estimation import saturates, served
 
 
 @dataclass
@@ -272,7 +271,7 @@ def write_run(summary: RunSummary, trace: Trace | None, out: Path,
     out.mkdir(parents=True, exist_ok=True)
     paths = [write_json(out / "results.json", summary)]
     if trace is not None and plot:
-        from ..plotting import plot_run
+        from ledsim.plotting import plot_run
 
         dist = ", ".join(summary.disturbances) or "no disturbance"
         paths.append(plot_run(trace, f"{summary.scenario} with {summary.estimator} — {dist}",

@@ -25,8 +25,8 @@ from __future__ import annotations
 import math
 from dataclasses import dataclass
 
-from ..config import LinkConstants
-from .beamfix import BeamFix
+from ledsim.config import LinkConstants
+from ledsim.loop.beamfix import BeamFix
 
 __all__ = ["AcquisitionLog", "BeamFix", "FastAcquisition", "TimeOptimalSlew"]
 

@@ -5,16 +5,15 @@ from __future__ import annotations
 
 from typing import NamedTuple
 
+from ledsim.loop.config import RunConfig
+from ledsim.loop.estimation import run_noise
+from ledsim.physics.disturbances import parse_disturbance
+from ledsim.physics.sensor import IrradianceSensor
+from ledsim.physics.system import GimbalSystem
+from ledsim.physics.tick import prepare
+from ledsim.physics.vehicle import Vehicle
+from ledsim.physics.world import LinkWorld
 from observer.noise import MeasurementNoise
-
-from ..physics.disturbances import parse_disturbance
-from ..physics.sensor import IrradianceSensor
-from ..physics.system import GimbalSystem
-from ..physics.tick import prepare
-from ..physics.vehicle import Vehicle
-from ..physics.world import LinkWorld
-from .config import RunConfig
-from .estimation import run_noise
 
 
 class Surroundings(NamedTuple):

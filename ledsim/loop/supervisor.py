@@ -17,20 +17,19 @@ from collections import deque
 
 import numpy as np
 
+from ledsim.config import LinkConstants
+from ledsim.control import intensity_maximum
+from ledsim.loop.acquisition import AcquisitionScan
+from ledsim.loop.held import SEED_RATE_STD, HeldEstimate
+from ledsim.loop.link_gain import link_gain_tracker
+from ledsim.loop.slew import FastAcquisition
+from ledsim.optics import (
+    pair_phi_variance,
+)
+from ledsim.step import Decision
 from observer.estimator import Estimator
 from observer.occlusion import EncoderCarry
 from observer.supervision import ResidualMonitor
-
-from ..config import LinkConstants
-from ..control import intensity_maximum
-from ..optics import (
-    pair_phi_variance,
-)
-from ..step import Decision
-from .acquisition import AcquisitionScan
-from .held import SEED_RATE_STD, HeldEstimate
-from .link_gain import link_gain_tracker
-from .slew import FastAcquisition
 
 #: The scan of a fast acquisition: it only has to bring the beam into view, so it sweeps
 #: at 2 rad/s and widens by most of the field of view each half sweep (the fix takes

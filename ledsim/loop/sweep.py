@@ -26,12 +26,12 @@ from collections.abc import Sequence
 from dataclasses import asdict, dataclass, replace
 from pathlib import Path
 
-from ..errors import LedsimError
-from ..outputs import atomic_write_text
-from ..physics.scene import DEFAULT_DEPTH
-from ..results import to_jsonable
-from .config import RunConfig
-from .report import Stat
+from ledsim.errors import LedsimError
+from ledsim.loop.config import RunConfig
+from ledsim.loop.report import Stat
+from ledsim.outputs import atomic_write_text
+from ledsim.physics.scene import DEFAULT_DEPTH
+from ledsim.results import to_jsonable
 
 log = logging.getLogger("ledsim")
 
@@ -129,7 +129,7 @@ class SweepGrid:
                           ("--noise-scale", self.noise_scales)):
             if not seq:
                 raise LedsimError(f"{name}: give at least one value")
-        from .estimation import check_checkpoint
+        from ledsim.loop.estimation import check_checkpoint
 
         for cell in {Cell(e, d, r, n, 0) for e, d, r, n in itertools.product(
                 self.estimators, self.disturbances, self.distances, self.noise_scales)}:
@@ -140,8 +140,8 @@ class SweepGrid:
 
 def run_cell(job: tuple[RunConfig, Cell]) -> dict:
     """One row of ``results.csv`` (module level: it is shipped to the workers)."""
-    from .. import __version__
-    from .closed_loop import run_once
+    from ledsim import __version__
+    from ledsim.loop.closed_loop import run_once
 
     cfg, cell = job
     out = run_once(cfg, cell.seed)
@@ -192,7 +192,7 @@ class SweepStore:
         return data["row"] if data.get("key") == cell.key(self.grid.base) else None
 
     def save(self, cell: Cell, result: dict) -> None:
-        from .. import __version__
+        from ledsim import __version__
 
         if result["version"] != __version__:
             raise LedsimError(f"a worker runs ledsim {result['version']}, this machine "
@@ -207,7 +207,7 @@ class SweepStore:
         summary = summarize_rows(rows)
         atomic_write_text(paths[1], _csv(summary, tuple(summary[0])))
         if plot:
-            from ..plotting import plot_sweep
+            from ledsim.plotting import plot_sweep
 
             paths.append(plot_sweep(summary, self.out / "summary.png"))
         return paths
@@ -276,7 +276,7 @@ def run_sweep(grid: SweepGrid, out: str | Path, backend: str = "local",
         store.save(job[1], result)
         done[job[1]] = result["row"]
 
-    from ..montecarlo import run_jobs, run_jobs_ray
+    from ledsim.montecarlo import run_jobs, run_jobs_ray
 
     if backend == "local":
         run_jobs(run_cell, jobs, workers, "sweep", progress, on_result=keep)

@@ -3,8 +3,8 @@
 
 from __future__ import annotations
 
-from ..physics.disturbances import parse_disturbance
-from .report import RunSummary, Stat
+from ledsim.loop.report import RunSummary, Stat
+from ledsim.physics.disturbances import parse_disturbance
 
 TABLE_HEADER = ("| scenario | disturbance | estimator | x1 RMSE [rad] | x2 RMSE [rad/s] "
                 "| align time [s] | availability | FEC share | mean P1 [W] | recovery [s] "

@@ -13,10 +13,10 @@ import time
 
 import numpy as np
 
-from ..config import PAPER_DISTANCE, LinkConstants
-from ..physics.scene import WorldConfig
-from ..physics.system import GimbalSystem
-from .estimation import bank_preset, noisier
+from ledsim.config import PAPER_DISTANCE, LinkConstants
+from ledsim.loop.estimation import bank_preset, noisier
+from ledsim.physics.scene import WorldConfig
+from ledsim.physics.system import GimbalSystem
 
 
 def train_mujoco_observer(distance: float = PAPER_DISTANCE, noise_scale: float = 1.0,
@@ -38,9 +38,8 @@ def train_mujoco_observer(distance: float = PAPER_DISTANCE, noise_scale: float =
             physical presets' KKL is trained in
             :func:`~ledsim.radiometry.presets.kkl_reference_constants`).
     """
+    from ledsim.presets import train_preset
     from observer.training import generate_transitions
-
-    from ..presets import train_preset
 
     constants = LinkConstants(distance=distance) if constants is None else constants
     system = GimbalSystem(noisier(WorldConfig(constants=constants), noise_scale),

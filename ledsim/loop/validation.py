@@ -8,7 +8,7 @@ import math
 import types
 import typing
 
-from ..config import (
+from ledsim.config import (
     MIN_BIT_RATE,
     MIN_DISTANCE,
     MIN_NOISE_SCALE,
@@ -16,15 +16,10 @@ from ..config import (
     LinkConstants,
     NavigationNoise,
 )
-from ..errors import LedsimError, check_ranges
-from ..estimators import LOOP_KKL_ESTIMATORS
-from ..keyvalues import settings_of
-from ..physics.disturbances import check_sea, check_timing, parse_disturbance
-from ..physics.scene import WorldConfig, WorldError, transmitter_rise
-from ..physics.vehicle import StationKeeping
-from ..radiometry.presets import LINK_PRESETS
-from ..radiometry.water import WATER_TYPES
-from .registry import (
+from ledsim.errors import LedsimError, check_ranges
+from ledsim.estimators import LOOP_KKL_ESTIMATORS
+from ledsim.keyvalues import settings_of
+from ledsim.loop.registry import (
     ACQUISITIONS,
     FILTER_DISTANCES,
     LOOP_ESTIMATORS,
@@ -34,6 +29,11 @@ from .registry import (
     PHYSICS_SCENARIOS,
     peak_snr,
 )
+from ledsim.physics.disturbances import check_sea, check_timing, parse_disturbance
+from ledsim.physics.scene import WorldConfig, WorldError, transmitter_rise
+from ledsim.physics.vehicle import StationKeeping
+from ledsim.radiometry.presets import LINK_PRESETS
+from ledsim.radiometry.water import WATER_TYPES
 
 
 def navigation_noise(settings: tuple[str, ...]) -> NavigationNoise:
@@ -155,8 +155,8 @@ def check_world(config: WorldConfig) -> None:
     than in its first step. Raises :class:`~ledsim.physics.scene.WorldError`."""
     import mujoco
 
-    from ..physics.sensor import IrradianceSensor
-    from ..physics.world import LinkWorld
+    from ledsim.physics.sensor import IrradianceSensor
+    from ledsim.physics.world import LinkWorld
 
     world = LinkWorld(config)
     try:

@@ -14,12 +14,11 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from ledsim.linkbudget import BIT_RATE, link_budget_of
+from ledsim.loop.losses import StepFlags
+from ledsim.loop.metrics import availability_mask
+from ledsim.results import DictAccess
 from observer.noise import MeasurementNoise
-
-from ..linkbudget import BIT_RATE, link_budget_of
-from ..results import DictAccess
-from .losses import StepFlags
-from .metrics import availability_mask
 
 
 @dataclass

@@ -2,7 +2,7 @@
 section 4, and the Monte-Carlo evaluation behind ``ledsim evaluate``. Never imports
 mujoco (``tests/test_layout.py`` checks)."""
 
-from .model import LEDLinkModel
-from .scenarios import PAPER_SCENARIOS, Noise, get_scenario, run
+from ledsim.paper.model import LEDLinkModel
+from ledsim.paper.scenarios import PAPER_SCENARIOS, Noise, get_scenario, run
 
 __all__ = ["LEDLinkModel", "PAPER_SCENARIOS", "Noise", "get_scenario", "run"]

@@ -5,6 +5,10 @@ from __future__ import annotations
 
 import numpy as np
 
+from ledsim.control import intensity_maximum, receiver_peak
+from ledsim.optics import receiver_response
+from ledsim.paper.model import LEDLinkModel
+from ledsim.paper.scenarios import Trajectory
 from observer.metrics import pointing_loss_db
 from observer.pcrb import (
     BoundTerms,
@@ -13,11 +17,6 @@ from observer.pcrb import (
     process_information,
     trajectory_terms,
 )
-
-from ..control import intensity_maximum, receiver_peak
-from ..optics import receiver_response
-from .model import LEDLinkModel
-from .scenarios import Trajectory
 
 #: The tables' two state keys.
 STATE_KEYS = ("x1", "x2")

@@ -11,19 +11,18 @@ from pathlib import Path
 
 import numpy as np
 
+from ledsim.config import MIN_DISTANCE, LinkConstants
+from ledsim.errors import LedsimError, check_ranges
+from ledsim.estimators import CLOSED_FORM_ESTIMATORS as CLOSED_FORM_ESTIMATORS  # alias
+from ledsim.estimators import build_estimator
+from ledsim.montecarlo import run_jobs
+from ledsim.outputs import atomic_write_text
+from ledsim.paper.bound import bound_stats, bound_terms, pointing_loss
+from ledsim.paper.model import LEDLinkModel
+from ledsim.paper.scenarios import PAPER_TABLE1, PAPER_TABLE2, Noise, Trajectory, get_scenario, run
+from ledsim.resources import require_shipped_checkpoint, shipped_checkpoint
+from ledsim.results import DictAccess, write_json
 from observer.metrics import converged, mean_and_spread, rmse
-
-from ..config import MIN_DISTANCE, LinkConstants
-from ..errors import LedsimError, check_ranges
-from ..estimators import CLOSED_FORM_ESTIMATORS as CLOSED_FORM_ESTIMATORS  # alias
-from ..estimators import build_estimator
-from ..montecarlo import run_jobs
-from ..outputs import atomic_write_text
-from ..resources import require_shipped_checkpoint, shipped_checkpoint
-from ..results import DictAccess, write_json
-from .bound import bound_stats, bound_terms, pointing_loss
-from .model import LEDLinkModel
-from .scenarios import PAPER_TABLE1, PAPER_TABLE2, Noise, Trajectory, get_scenario, run
 
 CONVERGENCE_TOLERANCE = 0.02  # rad: steady-state x1 RMSE below this counts as converged
 KEYS = ("x1", "x2", "y1", "y2")
@@ -252,7 +251,7 @@ def markdown_table(result: EvaluationResult) -> str:
 
 def write_outputs(result: EvaluationResult, out_dir: Path) -> list[Path]:
     """results.json, table.md and the figures; each written atomically."""
-    from ..plotting import plot_estimates, plot_powers
+    from ledsim.plotting import plot_estimates, plot_powers
 
     out_dir = Path(out_dir)
     out_dir.mkdir(parents=True, exist_ok=True)

@@ -13,16 +13,15 @@ from __future__ import annotations
 
 import numpy as np
 
-from observer.system import DiscreteSystem
-
-from ..config import LinkConstants
-from ..optics import (
+from ledsim.config import LinkConstants
+from ledsim.optics import (
     layout_power,
     layout_power_jacobian,
     plausible_power_range,
     step_form,
     transmitter_gain,
 )
+from observer.system import DiscreteSystem
 
 
 class LEDLinkModel(DiscreteSystem):

@@ -24,14 +24,13 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from ledsim.control import Excitation, PaperRateDamping
+from ledsim.errors import LedsimError
+from ledsim.results import DictAccess
+from ledsim.scenario import Scenario
+from ledsim.step import ControlStep, DirectInput, Unsupervised, identity_gate
 from observer.estimator import Estimator
 from observer.system import DiscreteSystem
-
-from ..control import Excitation, PaperRateDamping
-from ..errors import LedsimError
-from ..results import DictAccess
-from ..scenario import Scenario
-from ..step import ControlStep, DirectInput, Unsupervised, identity_gate
 
 # Paper Table 1 / Table 2 RMSE: (x1 [rad], x2 [rad/s], y1 [W], y2 [W]).
 PAPER_TABLE1 = {

@@ -19,8 +19,8 @@ from concurrent.futures import ThreadPoolExecutor
 import mujoco
 import numpy as np
 
-from .tick import OwnsThreads, advance, prepare
-from .world import RAY_GROUPS, LinkWorld
+from ledsim.physics.tick import OwnsThreads, advance, prepare
+from ledsim.physics.world import RAY_GROUPS, LinkWorld
 
 
 class WorldPoses:

@@ -15,9 +15,9 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from ..optics import received_power, receiver_response, transmitter_gain
-from .batch import WorldBatch, WorldPoses, cross3, dot3
-from .sensor import IrradianceSensor, SensorReading
+from ledsim.optics import received_power, receiver_response, transmitter_gain
+from ledsim.physics.batch import WorldBatch, WorldPoses, cross3, dot3
+from ledsim.physics.sensor import IrradianceSensor, SensorReading
 
 
 @dataclass

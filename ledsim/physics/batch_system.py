@@ -21,10 +21,10 @@ import mujoco
 import numpy as np
 from mujoco import rollout
 
-from .batch import WorldBatch
-from .batch_sensor import BatchSensor
-from .sensor import IrradianceSensor
-from .world import LinkWorld, WorldError
+from ledsim.physics.batch import WorldBatch
+from ledsim.physics.batch_sensor import BatchSensor
+from ledsim.physics.sensor import IrradianceSensor
+from ledsim.physics.world import LinkWorld, WorldError
 
 FULL = mujoco.mjtState.mjSTATE_FULLPHYSICS
 

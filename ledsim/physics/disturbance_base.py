@@ -4,8 +4,8 @@ from __future__ import annotations
 
 import numpy as np
 
-from ..errors import LedsimError
-from .world import LinkWorld
+from ledsim.errors import LedsimError
+from ledsim.physics.world import LinkWorld
 
 
 class DisturbanceError(LedsimError):

@@ -27,11 +27,11 @@ from dataclasses import dataclass, fields
 
 import numpy as np
 
-from ..keyvalues import parse_key_values
-from .disturbance_base import Disturbance, DisturbanceError  # noqa: F401 (re-exported)
-from .light import Scintillation, SunlightFlicker
-from .water import WaterCurrent, Waves
-from .world import LinkWorld
+from ledsim.keyvalues import parse_key_values
+from ledsim.physics.disturbance_base import Disturbance, DisturbanceError  # noqa: F401 (re-exported)
+from ledsim.physics.light import Scintillation, SunlightFlicker
+from ledsim.physics.water import WaterCurrent, Waves
+from ledsim.physics.world import LinkWorld
 
 
 @dataclass

@@ -16,14 +16,13 @@ from typing import NamedTuple
 
 import numpy as np
 
+from ledsim.config import ConfigError, NavigationNoise
+from ledsim.errors import check_ranges
+from ledsim.physics.world import LinkWorld
 from observer.hull_loads import HullLoadObserver, soft_deadband
 from observer.ins import InsState
 from observer.rowops import columns, ops
 from observer.rows import Rows
-
-from ..config import ConfigError, NavigationNoise
-from ..errors import check_ranges
-from .world import LinkWorld
 
 
 @dataclass(frozen=True)

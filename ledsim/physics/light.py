@@ -16,8 +16,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from .disturbance_base import DisturbanceError, SeededDisturbance
-from .world import LinkWorld
+from ledsim.physics.disturbance_base import DisturbanceError, SeededDisturbance
+from ledsim.physics.world import LinkWorld
 
 
 def _pair(rng: np.random.Generator, n: int, correlation: float) -> np.ndarray:

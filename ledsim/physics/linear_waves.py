@@ -27,7 +27,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from ..config import GRAVITY
+from ledsim.config import GRAVITY
 
 
 def wavenumber(period: float, water_depth: float = math.inf) -> float:

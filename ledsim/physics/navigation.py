@@ -39,11 +39,10 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from ledsim.config import GRAVITY, NavigationNoise
+from ledsim.physics.world import LinkWorld, WorldError
 from observer.rotations import rotation_log
 from observer.rows import Rows
-
-from ..config import GRAVITY, NavigationNoise
-from .world import LinkWorld, WorldError
 
 #: Added to the run's seed for the navigation sensors' own generator.
 SEED_OFFSET = 20_000

@@ -25,13 +25,13 @@ from pathlib import Path
 import mujoco
 import numpy as np
 
-from ..errors import LedsimError
-from ..optics import peak_power
-from ..outputs import INTERRUPTED, umask
-from .overlay import STATUS_BADGES, Overlay  # noqa: F401 (re-exported)
-from .sea_render import add_beam_cone, add_surface
-from .sensor import SensorReading
-from .world import LinkWorld
+from ledsim.errors import LedsimError
+from ledsim.optics import peak_power
+from ledsim.outputs import INTERRUPTED, umask
+from ledsim.physics.overlay import STATUS_BADGES, Overlay  # noqa: F401 (re-exported)
+from ledsim.physics.sea_render import add_beam_cone, add_surface
+from ledsim.physics.sensor import SensorReading
+from ledsim.physics.world import LinkWorld
 
 BEAM_WIDTH = 0.0012  # m, radius of the drawn beam capsules
 CLEAR = np.array([0.35, 1.0, 0.95])

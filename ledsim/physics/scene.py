@@ -15,17 +15,17 @@ from pathlib import Path
 import mujoco
 import numpy as np
 
-from ..config import MIN_DISTANCE, ConfigError, LinkConstants
-from ..errors import LedsimError, check_ranges
-from ..resources import scene_path
-from .scene_ids import (  # noqa: F401 (re-exported)
+from ledsim.config import MIN_DISTANCE, ConfigError, LinkConstants
+from ledsim.errors import LedsimError, check_ranges
+from ledsim.physics.scene_ids import (  # noqa: F401 (re-exported)
     MAGNETOMETER,
     THRUSTERS,
     VEHICLE_SENSORS,
     SceneIds,
     VehicleMotion,
 )
-from .sea_scene import apply_sea
+from ledsim.physics.sea_scene import apply_sea
+from ledsim.resources import scene_path
 
 #: Former module-level name of the default scene.
 SCENE = scene_path()

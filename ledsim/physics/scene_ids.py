@@ -8,8 +8,8 @@ from typing import NamedTuple
 
 import numpy as np
 
-from ..config import LinkConstants
-from ..layout import ReceiverLayout
+from ledsim.config import LinkConstants
+from ledsim.layout import ReceiverLayout
 
 
 @dataclass(frozen=True)

@@ -10,8 +10,8 @@ import math
 import mujoco
 import numpy as np
 
-from .linear_waves import RegularWave
-from .world import LinkWorld
+from ledsim.physics.linear_waves import RegularWave
+from ledsim.physics.world import LinkWorld
 
 CONE = np.array([0.35, 1.0, 0.95])
 SURFACE = np.array([0.55, 0.8, 0.9])

@@ -20,17 +20,16 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from observer.noise import MeasurementNoise
-from observer.rowops import FLOATS
-
-from ..optics import (
+from ledsim.optics import (
     received_power,
     receiver_response_at,
     transmitter_gain,
     transmitter_gain_at,
 )
-from .incidence import incidence_geometry, incidence_rate
-from .world import LinkWorld, WorldError
+from ledsim.physics.incidence import incidence_geometry, incidence_rate
+from ledsim.physics.world import LinkWorld, WorldError
+from observer.noise import MeasurementNoise
+from observer.rowops import FLOATS
 
 
 @dataclass

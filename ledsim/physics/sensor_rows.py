@@ -19,12 +19,11 @@ from collections.abc import Sequence
 import mujoco
 import numpy as np
 
+from ledsim.physics.batch import WorldPoses
+from ledsim.physics.batch_sensor import needs_rays
+from ledsim.physics.incidence import incidence_geometry, incidence_rate
+from ledsim.physics.sensor import IrradianceSensor, SensorReading
 from observer.rowops import ARRAYS
-
-from .batch import WorldPoses
-from .batch_sensor import needs_rays
-from .incidence import incidence_geometry, incidence_rate
-from .sensor import IrradianceSensor, SensorReading
 
 _SITE = mujoco.mjtObj.mjOBJ_SITE
 

@@ -19,13 +19,13 @@ from pathlib import Path
 import numpy as np
 from tqdm.auto import tqdm
 
-from ..config import LinkConstants
-from ..errors import LedsimError
-from ..layout import ReceiverLayout
-from ..outputs import atomic_write_bytes
-from .sensor import IrradianceSensor, SensorReading
-from .tick import advance, prepare
-from .world import LinkWorld
+from ledsim.config import LinkConstants
+from ledsim.errors import LedsimError
+from ledsim.layout import ReceiverLayout
+from ledsim.outputs import atomic_write_bytes
+from ledsim.physics.sensor import IrradianceSensor, SensorReading
+from ledsim.physics.tick import advance, prepare
+from ledsim.physics.world import LinkWorld
 
 
 class ProfileError(LedsimError):

@@ -30,7 +30,7 @@ from dataclasses import dataclass
 import mujoco
 import numpy as np
 
-from .linear_waves import RegularWave
+from ledsim.physics.linear_waves import RegularWave
 
 
 @dataclass(frozen=True)

@@ -29,17 +29,16 @@ from __future__ import annotations
 
 import numpy as np
 
-from observer.system import DiscreteSystem
-
-from ..optics import (
+from ledsim.optics import (
     layout_power,
     layout_power_jacobian,
     plausible_power_range,
     receiver_response_at,
     step_form,
 )
-from .sensor import IrradianceSensor
-from .world import LinkWorld, WorldConfig
+from ledsim.physics.sensor import IrradianceSensor
+from ledsim.physics.world import LinkWorld, WorldConfig
+from observer.system import DiscreteSystem
 
 
 class GimbalSystem(DiscreteSystem):
@@ -87,7 +86,7 @@ class GimbalSystem(DiscreteSystem):
     def batched(self):
         """The :class:`~ledsim.physics.batch_system.GimbalBatch` of this system."""
         if self._batch is None:
-            from .batch_system import GimbalBatch
+            from ledsim.physics.batch_system import GimbalBatch
 
             self._batch = GimbalBatch(self.world, self.phi_home, self.threads)
         return self._batch

@@ -21,7 +21,7 @@ from __future__ import annotations
 from collections.abc import Sequence
 from concurrent.futures import ThreadPoolExecutor
 
-from .world import LinkWorld
+from ledsim.physics.world import LinkWorld
 
 
 def prepare(world: LinkWorld, disturbances: Sequence, t: float, vehicle=None) -> None:

@@ -42,18 +42,17 @@ import math
 
 import numpy as np
 
+from ledsim.config import GRAVITY, NavigationNoise
+from ledsim.physics.batch import cross3
+from ledsim.physics.keeping import StationKeeper, StationKeeping
+from ledsim.physics.navigation import GRAVITY_REACTION, NavigationReading, NavigationSensor
+from ledsim.physics.world import LinkWorld
 from observer.ins import FIX_GATE, AidedINS, InertialNoise, InsState
 from observer.line_of_sight import LineOfSight, LineOfSightFilter
 from observer.rowops import columns, ops
 from observer.rows import Rows
 from observer.rows import matvec as _mv
 from observer.rows import transposed as _T
-
-from ..config import GRAVITY, NavigationNoise
-from .batch import cross3
-from .keeping import StationKeeper, StationKeeping
-from .navigation import GRAVITY_REACTION, NavigationReading, NavigationSensor
-from .world import LinkWorld
 
 __all__ = ["LineOfSight", "StationKeeping", "Vehicle", "inertial_noise"]
 

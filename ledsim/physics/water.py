@@ -12,12 +12,12 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from ..config import GRAVITY
-from .disturbance_base import Disturbance, DisturbanceError, SeededDisturbance
-from .linear_waves import RegularWave
-from .scene import DEFAULT_DEPTH
-from .strips import HullStrips, StripCoefficients
-from .world import LinkWorld
+from ledsim.config import GRAVITY
+from ledsim.physics.disturbance_base import Disturbance, DisturbanceError, SeededDisturbance
+from ledsim.physics.linear_waves import RegularWave
+from ledsim.physics.scene import DEFAULT_DEPTH
+from ledsim.physics.strips import HullStrips, StripCoefficients
+from ledsim.physics.world import LinkWorld
 
 #: The steepest a wave can stand in deep water, H/L (Michell 1893): steeper, its crest
 #: breaks. Over a sea of finite depth h the limit is Miche's (1944), (1/7) tanh(k h),

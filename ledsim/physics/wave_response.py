@@ -8,7 +8,7 @@ from typing import NamedTuple
 
 import numpy as np
 
-from ..config import GRAVITY
+from ledsim.config import GRAVITY
 
 
 class WaveResponse(NamedTuple):
@@ -35,11 +35,11 @@ def free_hull_response(period: float, depth: float, heading: float, height: floa
     [rad], ``depth`` [m] down, on ``link``'s world (strip theory is a physical link's
     default): each amplitude from a least-squares sine with a drift over the last two
     thirds of ``seconds``."""
-    from ..radiometry.presets import link_constants
-    from .disturbances import parse_disturbance
-    from .scene import WorldConfig
-    from .tick import advance, prepare
-    from .world import LinkWorld
+    from ledsim.physics.disturbances import parse_disturbance
+    from ledsim.physics.scene import WorldConfig
+    from ledsim.physics.tick import advance, prepare
+    from ledsim.physics.world import LinkWorld
+    from ledsim.radiometry.presets import link_constants
 
     c = link_constants(link, 30.0)
     world = LinkWorld(WorldConfig(constants=c, depth=depth))

@@ -36,8 +36,8 @@ from contextlib import contextmanager
 import mujoco
 import numpy as np
 
-from .hull import HullAccess
-from .scene import SCENE, SceneIds, WorldConfig, WorldError, build_spec, set_buoyancy
+from ledsim.physics.hull import HullAccess
+from ledsim.physics.scene import SCENE, SceneIds, WorldConfig, WorldError, build_spec, set_buoyancy
 
 __all__ = ["LinkWorld", "WorldConfig", "WorldError", "SCENE"]
 

@@ -10,9 +10,8 @@ from __future__ import annotations
 import math
 from dataclasses import dataclass
 
+from ledsim.errors import LedsimError
 from observer.noise import Digitiser
-
-from ..errors import LedsimError
 
 #: Elementary charge [C].
 ELEMENTARY_CHARGE = 1.602176634e-19

@@ -28,12 +28,11 @@ from __future__ import annotations
 import math
 from dataclasses import dataclass
 
+from ledsim.config import LinkConstants, ReceiverResponse
+from ledsim.errors import LedsimError
+from ledsim.radiometry.hardware import Detector, ReceiverOptics, Transmitter
+from ledsim.radiometry.water import Water
 from observer.noise import Digitiser, MeasurementNoise
-
-from ..config import LinkConstants, ReceiverResponse
-from ..errors import LedsimError
-from .hardware import Detector, ReceiverOptics, Transmitter
-from .water import Water
 
 #: Horizontal radiance over the downwelling irradiance's equivalent radiance E_d / pi
 #: [-]: the upper ocean's radiance distribution peaks near the zenith; looking sideways

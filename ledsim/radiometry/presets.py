@@ -12,11 +12,11 @@ from __future__ import annotations
 import math
 from dataclasses import dataclass, field
 
-from ..config import PAPER_DISTANCE, LinkConstants
-from ..errors import LedsimError, named
-from .hardware import DETECTORS, ReceiverOptics, Transmitter
-from .link import RadiometricLink
-from .water import WATER_TYPES, Water, water_named
+from ledsim.config import PAPER_DISTANCE, LinkConstants
+from ledsim.errors import LedsimError, named
+from ledsim.radiometry.hardware import DETECTORS, ReceiverOptics, Transmitter
+from ledsim.radiometry.link import RadiometricLink
+from ledsim.radiometry.water import WATER_TYPES, Water, water_named
 
 
 @dataclass(frozen=True)
@@ -190,7 +190,7 @@ def kkl_reference_constants(base: LinkConstants | None = None) -> LinkConstants:
     response g(phi) (every physical preset's: a 30 deg Gaussian) and its relative noise
     :data:`KKL_REFERENCE_NOISE`, constant. The supervisor's gain tracker maps a run's
     powers onto it, as it maps the bench's other distances onto 0.085 m."""
-    from ..optics import peak_power
+    from ledsim.optics import peak_power
 
     base = LinkConstants() if base is None else base
     response = next(p for p in LINK_PRESETS.values() if p.physical).link(

@@ -30,7 +30,7 @@ from dataclasses import dataclass, replace
 
 import numpy as np
 
-from ..errors import LedsimError, named
+from ledsim.errors import LedsimError, named
 
 #: Pure water's absorption [1/m] every 10 nm from 400 nm (Pope and Fry 1997, table 3).
 _PURE_WATER_NM = np.arange(400.0, 610.0, 10.0)

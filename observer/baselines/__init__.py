@@ -1,7 +1,7 @@
 """Classical estimators run on exactly the same measurements as the KKL observer."""
 
-from .ekf import ExtendedKalmanFilter
-from .pf import ParticleFilter
-from .ukf import UnscentedKalmanFilter
+from observer.baselines.ekf import ExtendedKalmanFilter
+from observer.baselines.pf import ParticleFilter
+from observer.baselines.ukf import UnscentedKalmanFilter
 
 __all__ = ["ExtendedKalmanFilter", "UnscentedKalmanFilter", "ParticleFilter"]

@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from ..estimator import GaussianFilter, usable_mask
+from observer.estimator import GaussianFilter, usable_mask
 
 
 class ExtendedKalmanFilter(GaussianFilter):

@@ -4,9 +4,9 @@ from __future__ import annotations
 
 import numpy as np
 
-from ..errors import ObserverError
-from ..estimator import Estimator, ToldNoise, usable_mask
-from ..system import DiscreteSystem
+from observer.errors import ObserverError
+from observer.estimator import Estimator, ToldNoise, usable_mask
+from observer.system import DiscreteSystem
 
 
 class ParticleFilter(ToldNoise, Estimator):

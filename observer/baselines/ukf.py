@@ -4,8 +4,8 @@ from __future__ import annotations
 
 import numpy as np
 
-from ..estimator import GaussianFilter, usable_mask
-from ..system import DiscreteSystem
+from observer.estimator import GaussianFilter, usable_mask
+from observer.system import DiscreteSystem
 
 
 def nearest_covariance(P: np.ndarray, floor: float = 1e-12) -> np.ndarray:
