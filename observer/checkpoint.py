@@ -48,7 +48,7 @@ def save(obs: KKLObserver, path: str | Path, extra: dict | None = None,
     checkpoint's path.
 
     ``write_bytes(path, data)`` writes each file (default: beside it, then renamed over
-    it); an application passes its own (``ledsim.outputs.save_checkpoint``)."""
+    it); an application passes its own (``ledsim.files.outputs.save_checkpoint``)."""
     path = target(path)
     if isinstance(obs, ScheduledKKL):
         meta, named = scheduled_checkpoint.metadata(obs), scheduled_checkpoint.arrays(obs)

@@ -41,7 +41,7 @@ class StepForm:
         r'      = b1 r + b2 u + b3 |r| r          (r = phidot)
     h:  gain [g(phi + o_i)] over the receiver's photodiodes (offsets o_i; the paper's
         pair: 0 and dphi),  g(phi) = c1 exp(-((phi - m1)/w1)^2) + c2 exp(-((phi + m2)/w2)^2)
-        (ledsim.optics.response_terms, the same formula; tests/test_export.py checks the
+        (ledsim.radiometry.optics.response_terms, the same formula; tests/test_export.py checks the
         graph against the numpy observer)
 
     Attributes:

@@ -31,7 +31,7 @@ position fix   p at the time it was measured (``delay``   per fix (may grow with
                s ago, from the INS's own displacement)    outliers rejected by a gate
 =============  =========================================  =============================
 
-Numpy only, any vehicle: ledsim's vehicle (``ledsim.physics.vehicle``) feeds it. One
+Numpy only, any vehicle: ledsim's vehicle (``ledsim.agent.autopilot``) feeds it. One
 filter runs one vehicle, or the vehicles of N worlds at once (a state with a leading
 axis of N): every row computed as the filter of one computes it (stacked matrix
 products run each row through the same BLAS kernel), so a vehicle's navigation does not

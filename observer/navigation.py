@@ -10,7 +10,7 @@ plane of a vehicle that stays level:
     position    p'   = p + Te v,   and at a fix f:  p <- p + g (f - p)
 
 The heading is dead-reckoned from the known start: a gyro bias of 10 deg/h moves it by
-0.06 deg in 20 s. Numpy only; the vehicle (``ledsim.physics.vehicle``) feeds it.
+0.06 deg in 20 s. Numpy only; the vehicle (``ledsim.agent.autopilot``) feeds it.
 """
 
 from __future__ import annotations

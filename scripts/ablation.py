@@ -18,12 +18,12 @@ from pathlib import Path
 
 import numpy as np
 
-from ledsim.config import LinkConstants
-from ledsim.estimators import build_estimator
-from ledsim.outputs import atomic_write_text
+from ledsim.constants import LinkConstants
+from ledsim.experiment.estimators import build_estimator
+from ledsim.experiment.observer_presets import DEFAULT_RATES, observer_preset
+from ledsim.files.outputs import atomic_write_text
 from ledsim.paper.model import LEDLinkModel
 from ledsim.paper.scenarios import Noise, get_scenario, run
-from ledsim.presets import DEFAULT_RATES, observer_preset
 from observer.kkl import KKLDesign, series_encoder
 from observer.metrics import converged, rmse
 from observer.training import TrainingConfig, train_kkl

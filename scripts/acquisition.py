@@ -17,11 +17,11 @@ from pathlib import Path
 import numpy as np
 from tqdm.auto import tqdm
 
-from ledsim.control import intensity_maximum
+from ledsim.agent.laws import intensity_maximum
+from ledsim.files.outputs import atomic_write_text
 from ledsim.loop.closed_loop import ClosedLoop
-from ledsim.loop.config import RunConfig
-from ledsim.loop.metrics import first_settled
-from ledsim.outputs import atomic_write_text
+from ledsim.loop.run_config import RunConfig
+from ledsim.loop.run_metrics import first_settled
 from ledsim.physics.world import LinkWorld
 
 ROOT = Path(__file__).resolve().parent.parent
@@ -155,7 +155,7 @@ def main() -> None:
         "at its 0.3 rad/s limit; `--acquisition minimum-time` (the default) fixes the beam "
         "from the "
         "pair of powers carried on the encoder, slews there at the torque limit and "
-        "hands over on arrival (`ledsim/loop/slew.py`). Alignment time: first time "
+        "hands over on arrival (`ledsim/agent/slew.py`). Alignment time: first time "
         "|phi - phi_ref| < 1 deg for 0.5 s. Silent errors: share of the run with the "
         "estimate more than 0.2 rad off and the link not flagged.", "",
         "## Starts", "", *starts, "",

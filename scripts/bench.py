@@ -13,7 +13,7 @@ from __future__ import annotations
 import argparse
 import os
 
-from ledsim.montecarlo import WORKER_ENV  # imports no numpy
+from ledsim.experiment.montecarlo import WORKER_ENV  # imports no numpy
 
 # Before numpy (and its BLAS) is imported: one thread, so "one core" means one core.
 os.environ.update(WORKER_ENV)
@@ -27,11 +27,11 @@ import numpy as np
 import torch
 from bench_batch import batch_against_rollout, floor_us  # scripts/, beside this file
 
-from ledsim.config import LinkConstants
-from ledsim.outputs import atomic_write_text
+from ledsim.constants import LinkConstants
+from ledsim.experiment.observer_presets import observer_preset
+from ledsim.files.outputs import atomic_write_text
 from ledsim.paper.evaluate import default_checkpoint
 from ledsim.paper.model import LEDLinkModel
-from ledsim.presets import observer_preset
 from observer import checkpoint
 from observer.baselines import ExtendedKalmanFilter, ParticleFilter, UnscentedKalmanFilter
 from observer.training import train_kkl
@@ -141,7 +141,7 @@ def batched_speed(n_worlds: int = 16, threads: int = 1, estimator: str = "kkl",
 def closed_loop_speed(estimator: str, integrator: str = "implicitfast") -> tuple[float, float]:
     """(real-time factor of the whole loop, estimator us per step), align scenario."""
     from ledsim.loop.closed_loop import run_once
-    from ledsim.loop.config import RunConfig
+    from ledsim.loop.run_config import RunConfig
 
     best = None
     for _ in range(2):
@@ -156,7 +156,7 @@ def transition_speed(n: int = 20_000) -> dict[str, float]:
     """Microseconds per MuJoCo transition (``GimbalSystem.f`` and ``h`` of one state, as
     ``scripts/train_mujoco.py`` generates them): one at a time, and batched
     (``mujoco.rollout`` + a world batch) on 1 and 2 threads."""
-    from ledsim.physics.system import GimbalSystem
+    from ledsim.physics.gimbal_system import GimbalSystem
     from observer.training import generate_transitions
 
     out = {}
@@ -202,11 +202,11 @@ def onnx_step_speed(steps: int = 2000) -> dict:
     the file's size."""
     import onnxruntime as ort
 
-    from ledsim.estimators import build_estimator
+    from ledsim.experiment.estimators import build_estimator
+    from ledsim.files.resources import require_shipped_checkpoint
     from ledsim.loop.estimation import identified_model
+    from ledsim.physics.gimbal_system import GimbalSystem
     from ledsim.physics.scene import WorldConfig
-    from ledsim.physics.system import GimbalSystem
-    from ledsim.resources import require_shipped_checkpoint
     from observer.export import kkl_step_graph
 
     system = GimbalSystem(WorldConfig())
@@ -357,7 +357,7 @@ def main() -> None:
     head_b, head_r = batch_rows["kkl", False, 1]
     lines += ["", "The vehicles of all seeds (navigation sensors, aided INS, station "
               "keeping, line of sight) are stepped in one pass over their rows "
-              "(`ledsim.physics.vehicle.Vehicle.stacked`), every row bit for bit its own "
+              "(`ledsim.agent.autopilot.Vehicle.stacked`), every row bit for bit its own "
               "vehicle's. The sensor, the supervisor and the estimator of each seed are "
               "still stepped one seed at a time, in Python under the GIL, so two threads "
               "gain little; they are most of a step. `docs/bench_batch.md` "
@@ -377,7 +377,7 @@ def main() -> None:
               "One transition is `GimbalSystem.h` and `GimbalSystem.f` of one state. "
               "Batched, `f` runs the substeps in `mujoco.rollout` and reads phidot "
               "through a world batch, and `h` reads the vectorised sensor "
-              "(`ledsim/physics/batch_system.py`); the numbers are the same.", "",
+              "(`ledsim/physics/gimbal_system_batch.py`); the numbers are the same.", "",
               "| how | us per transition | speed-up |", "|---|---|---|"]
     for label, us in trans.items():
         lines.append(f"| {label} | {us:.1f} | {ref / us:.2f}x |")

@@ -48,7 +48,7 @@ def measure(quick: bool) -> dict:
     warnings.filterwarnings("ignore")
     out = {}
     from ledsim.loop.closed_loop import ClosedLoop
-    from ledsim.loop.config import RunConfig
+    from ledsim.loop.run_config import RunConfig
 
     cfg = RunConfig(scenario="align", estimator="kkl", seconds=4.0 if quick else 10.0)
     loop = ClosedLoop(cfg, [0])
@@ -99,7 +99,7 @@ def batch_against_rollout(n: int, seconds: float, threads: int = 1,
     from mujoco import rollout
 
     from ledsim.loop.closed_loop import ClosedLoop
-    from ledsim.loop.config import RunConfig
+    from ledsim.loop.run_config import RunConfig
 
     cfg = RunConfig(scenario="align", estimator=estimator, supervision=supervision,
                     seconds=seconds)
@@ -220,7 +220,7 @@ def main() -> int:
         print(f"bench_batch: error: --rounds {args.rounds} is not allowed: must be >= 1",
               file=sys.stderr)
         return 2
-    from ledsim.outputs import atomic_write_text
+    from ledsim.files.outputs import atomic_write_text
 
     head = subprocess.run(["git", "rev-parse", "--short", "HEAD"], cwd=ROOT,
                           capture_output=True, text=True).stdout.strip() or "this tree"

@@ -115,7 +115,7 @@ def measure(n: int, seconds: float) -> dict:
     from bench_batch import batch_against_rollout
 
     from ledsim.loop.closed_loop import ClosedLoop
-    from ledsim.loop.config import RunConfig
+    from ledsim.loop.run_config import RunConfig
     from ledsim.physics.sensor_rows import SensorRows
 
     loop_sps, rollout_sps = batch_against_rollout(n, seconds)
@@ -197,7 +197,7 @@ def main() -> int:
     import warnings
 
     warnings.filterwarnings("ignore")
-    from ledsim.outputs import atomic_write_text
+    from ledsim.files.outputs import atomic_write_text
 
     r = measure(args.seeds, args.seconds)
     text = table(r)

@@ -6,7 +6,7 @@ disturbance, distance and vehicle rows.
 For each row and estimator (`ledsim run`'s defaults otherwise: the `align` scenario,
 link supervision, the vehicle's IMU and station keeping): the steady RMSE of phi and
 phidot, the root of the bound over the same window (along that estimator's own seeds,
-:mod:`ledsim.loop.bound`), their ratio with one Monte-Carlo standard error, the mean
+:mod:`ledsim.loop.pcrb_runs`), their ratio with one Monte-Carlo standard error, the mean
 pointing loss [dB] and the availability. Fixed seeds 0..N-1. Writes docs/bound.md and
 docs/img/bound.png.
 """
@@ -16,10 +16,10 @@ from __future__ import annotations
 import argparse
 from pathlib import Path
 
-from ledsim.loop.config import RunConfig
+from ledsim.experiment.plotting import _save, _subplots
+from ledsim.files.outputs import atomic_write_text
 from ledsim.loop.report import run_many
-from ledsim.outputs import atomic_write_text
-from ledsim.plotting import _save, _subplots
+from ledsim.loop.run_config import RunConfig
 
 ROOT = Path(__file__).resolve().parent.parent
 ESTIMATORS = ("kkl", "ekf", "pf", "oracle")
@@ -59,7 +59,7 @@ def main() -> None:
              "says otherwise; steady window from 5 s. The bound (root of its mean over the "
              "window, `pcrb_steady_x1` [rad] and `pcrb_steady_x2` [rad/s] in "
              "`results.json`) is computed along each estimator's own seeds from the model "
-             "the estimators use (`ledsim/loop/bound.py` says what it does not cover). "
+             "the estimators use (`ledsim/loop/pcrb_runs.py` says what it does not cover). "
              "The ratio is the root of the seeds' steady mean square error over it, "
              "± one Monte-Carlo standard error. The oracle reads the true state: its row "
              "gives the bound along its runs and its pointing loss, the floor that "

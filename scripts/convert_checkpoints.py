@@ -15,7 +15,7 @@ import argparse
 import sys
 from pathlib import Path
 
-from ledsim.outputs import atomic_write_bytes
+from ledsim.files.outputs import atomic_write_bytes
 from observer import checkpoint
 
 SHIPPED = Path(__file__).resolve().parent.parent / "ledsim" / "assets" / "checkpoints"

@@ -17,10 +17,10 @@ from pathlib import Path
 
 import numpy as np
 
-from ledsim.loop.config import RunConfig
+from ledsim.experiment.plotting import _save, _subplots
+from ledsim.files.outputs import atomic_write_text
 from ledsim.loop.report import run_many
-from ledsim.outputs import atomic_write_text
-from ledsim.plotting import _save, _subplots
+from ledsim.loop.run_config import RunConfig
 
 ROOT = Path(__file__).resolve().parent.parent
 ESTIMATORS = ("kkl", "ekf", "pf", "oracle")

@@ -18,12 +18,12 @@ from __future__ import annotations
 import argparse
 from pathlib import Path
 
-from ledsim.loop.config import COMPARED_ESTIMATORS, RunConfig
+from ledsim.files.outputs import atomic_write_text
+from ledsim.files.results import to_jsonable, write_json
 from ledsim.loop.report import run_many
+from ledsim.loop.run_config import COMPARED_ESTIMATORS, RunConfig
 from ledsim.loop.table import TABLE_HEADER, format_summary
-from ledsim.outputs import atomic_write_text
 from ledsim.physics.scene import INTEGRATORS
-from ledsim.results import to_jsonable, write_json
 
 ROOT = Path(__file__).resolve().parent.parent
 
@@ -103,13 +103,14 @@ def main() -> None:
              "the most the geometry of that moment allows (counting only steps where "
              "that is at least 2 noise std); FEC share: share of time the "
              "bit error rate of on-off keyed data at 1 kbit/s is under the 3.8e-3 "
-             "forward-error-correction limit (`ledsim/linkbudget.py`, `docs/model.md`); "
+             "forward-error-correction limit (`ledsim/radiometry/data_channel.py`, "
+             "`docs/model.md`); "
              "recovery: time after the occlusion ends (or the kick) until the link is "
              "available in 80% of a 0.5 s window (or 0.9 of its share in the second "
              "before), with the seeds that recovered; RTF: real-time factor of "
              "the whole loop. Runs are 10 s unless the case needs longer (occlusions of "
              "2 and 5 s, kick: 12-15 s). Every estimator runs under the same link "
-             "supervision (`ledsim/loop/supervisor.py`); the KKL is the one shipped "
+             "supervision (`ledsim/agent/supervisor.py`); the KKL is the one shipped "
              "gain-scheduled KKL of d = 0.085 m (`docs/observer.md`) at every distance, "
              "the filters use the model of the configured distance (and, in the "
              "rows marked so, the nominal model with the same gain tracker, as the KKL "

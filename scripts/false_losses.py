@@ -35,17 +35,17 @@ from pathlib import Path
 os.environ.setdefault("MUJOCO_GL", "osmesa")
 sys.path.insert(0, str(Path(__file__).resolve().parent.parent))
 
-from ledsim.montecarlo import pin_blas_threads  # noqa: E402
+from ledsim.experiment.montecarlo import pin_blas_threads  # noqa: E402
 
 pin_blas_threads()
 
 import numpy as np  # noqa: E402
 
+from ledsim.experiment.montecarlo import run_jobs  # noqa: E402
+from ledsim.files.outputs import atomic_write_text  # noqa: E402
 from ledsim.loop.losses import FALSE_LOSS_ERROR  # noqa: E402
-from ledsim.montecarlo import run_jobs  # noqa: E402
-from ledsim.outputs import atomic_write_text  # noqa: E402
 from ledsim.radiometry.budget import range_at_fec  # noqa: E402
-from ledsim.radiometry.presets import link_constants, preset_named  # noqa: E402
+from ledsim.radiometry.link_presets import link_constants, preset_named  # noqa: E402
 
 ROOT = Path(__file__).resolve().parent.parent
 
@@ -88,8 +88,8 @@ def cases(minutes: float) -> list[dict]:
 
 def one(job) -> dict:
     """One (case, estimator) over the seeds: the counts and the means."""
-    from ledsim.loop.config import RunConfig
     from ledsim.loop.report import run_seeds
+    from ledsim.loop.run_config import RunConfig
 
     case, est, seeds, seconds = job
     settings = {"link": "luma",

@@ -12,13 +12,13 @@ from __future__ import annotations
 
 from pathlib import Path
 
-from ledsim.config import LinkConstants
-from ledsim.estimators import build_estimator
-from ledsim.outputs import atomic_write_text
+from ledsim.constants import LinkConstants
+from ledsim.experiment.estimators import build_estimator
+from ledsim.experiment.plotting import plot_estimates, plot_powers_by_distance
+from ledsim.files.outputs import atomic_write_text
 from ledsim.paper.evaluate import default_checkpoint
 from ledsim.paper.model import LEDLinkModel
 from ledsim.paper.scenarios import Noise, get_scenario, run
-from ledsim.plotting import plot_estimates, plot_powers_by_distance
 
 ROOT = Path(__file__).resolve().parent.parent
 OUT = ROOT / "docs" / "figures"

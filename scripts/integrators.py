@@ -14,7 +14,7 @@ from __future__ import annotations
 
 import os
 
-from ledsim.montecarlo import WORKER_ENV  # imports no numpy
+from ledsim.experiment.montecarlo import WORKER_ENV  # imports no numpy
 
 os.environ.update(WORKER_ENV)  # before numpy: one core means one core
 import argparse
@@ -26,7 +26,7 @@ from pathlib import Path
 import numpy as np
 from bench import closed_loop_speed, world_speed  # scripts/ is sys.path[0]
 
-from ledsim.outputs import atomic_write_text
+from ledsim.files.outputs import atomic_write_text
 from ledsim.physics.scene import WorldConfig
 from ledsim.physics.world import LinkWorld
 
@@ -55,7 +55,7 @@ EXTREMES = ("current:speed=5,gust=2", "kick:start=2,rate=50", "kick:start=2,rate
 def survives(integrator: str, disturbance: str) -> bool:
     """Whether a 5 s oracle run under ``disturbance`` stays physically finite."""
     from ledsim.loop.closed_loop import run_once
-    from ledsim.loop.config import RunConfig
+    from ledsim.loop.run_config import RunConfig
     from ledsim.physics.world import WorldError
 
     try:

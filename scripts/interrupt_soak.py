@@ -40,7 +40,7 @@ import tempfile
 import time
 from pathlib import Path
 
-#: The commands that can be soaked: all go through ``ledsim.montecarlo.run_jobs``.
+#: The commands that can be soaked: all go through ``ledsim.experiment.montecarlo.run_jobs``.
 COMMANDS = {
     "run": ["run", "--seconds", "{seconds}", "--seeds", "{seeds}", "--workers", "{workers}",
             "--save-trace"],

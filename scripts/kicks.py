@@ -20,9 +20,9 @@ os.environ.setdefault("MUJOCO_GL", "osmesa")
 import numpy as np  # noqa: E402
 from tqdm.auto import tqdm  # noqa: E402
 
-from ledsim.loop.config import RunConfig  # noqa: E402
+from ledsim.files.outputs import atomic_write_text  # noqa: E402
 from ledsim.loop.report import run_seeds  # noqa: E402
-from ledsim.outputs import atomic_write_text  # noqa: E402
+from ledsim.loop.run_config import RunConfig  # noqa: E402
 
 ROOT = Path(__file__).resolve().parents[1]
 ESTIMATORS = ("kkl", "ekf", "pf", "oracle")

@@ -21,15 +21,15 @@ from pathlib import Path
 
 import numpy as np
 
-from ledsim.config import LinkConstants
-from ledsim.estimators import build_estimator
+from ledsim.constants import LinkConstants
+from ledsim.experiment.estimators import build_estimator
+from ledsim.files.outputs import atomic_write_text
 from ledsim.loop.closed_loop import ClosedLoop
-from ledsim.loop.config import RunConfig
 from ledsim.loop.report import summarize
-from ledsim.outputs import atomic_write_text
-from ledsim.paper.bound import bound_stats, bound_terms
+from ledsim.loop.run_config import RunConfig
 from ledsim.paper.evaluate import default_checkpoint
 from ledsim.paper.model import LEDLinkModel
+from ledsim.paper.pcrb_tables import bound_stats, bound_terms
 from ledsim.paper.scenarios import Noise, get_scenario, run
 from observer.metrics import rmse
 

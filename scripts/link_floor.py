@@ -17,10 +17,10 @@ import argparse
 import dataclasses
 from pathlib import Path
 
-from ledsim.loop import link_gain
-from ledsim.loop.config import RunConfig
+from ledsim.agent import link_gain
+from ledsim.files.outputs import atomic_write_text
 from ledsim.loop.report import run_many
-from ledsim.outputs import atomic_write_text
+from ledsim.loop.run_config import RunConfig
 from ledsim.radiometry import hardware
 
 ROOT = Path(__file__).resolve().parent.parent

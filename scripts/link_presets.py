@@ -2,7 +2,7 @@
 
     python scripts/link_presets.py            # a few seconds; writes docs/link.md
 
-For each real preset (``ledsim.radiometry.presets``): the range at the FEC limit
+For each real preset (``ledsim.radiometry.link_presets``): the range at the FEC limit
 computed from its hardware, in the water and at the bit rate of each published figure,
 with the effective attenuation (the model) and with Beer-Lambert's beam attenuation c
 (the pessimistic bound). A figure marked ``set`` was used to choose one parameter (the
@@ -18,10 +18,10 @@ import dataclasses
 import math
 from pathlib import Path
 
-from ledsim.linkbudget import FEC_LIMIT
-from ledsim.outputs import atomic_write_text
+from ledsim.files.outputs import atomic_write_text
 from ledsim.radiometry.budget import range_at_fec
-from ledsim.radiometry.presets import LINK_PRESETS, LinkPreset, PublishedFigure
+from ledsim.radiometry.data_channel import FEC_LIMIT
+from ledsim.radiometry.link_presets import LINK_PRESETS, LinkPreset, PublishedFigure
 from ledsim.radiometry.water import WATER_TYPES, Water
 
 ROOT = Path(__file__).resolve().parent.parent

@@ -16,11 +16,11 @@ from __future__ import annotations
 import argparse
 from pathlib import Path
 
-from ledsim.loop.config import RunConfig
+from ledsim.files.outputs import atomic_write_text
 from ledsim.loop.report import run_many
-from ledsim.outputs import atomic_write_text
+from ledsim.loop.run_config import RunConfig
 from ledsim.radiometry.budget import range_at_fec
-from ledsim.radiometry.presets import link_constants, preset_named
+from ledsim.radiometry.link_presets import link_constants, preset_named
 
 ROOT = Path(__file__).resolve().parent.parent
 WATERS = ("clear-ocean", "coastal", "harbour")

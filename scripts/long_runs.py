@@ -30,13 +30,13 @@ from pathlib import Path
 
 import numpy as np
 
-from ledsim.config import NavigationNoise
+from ledsim.constants import NavigationNoise
+from ledsim.experiment.montecarlo import run_jobs
+from ledsim.files.outputs import atomic_write_text
+from ledsim.files.results import to_jsonable, write_json
 from ledsim.loop.closed_loop import run_batch
-from ledsim.loop.config import RunConfig
 from ledsim.loop.report import summarize
-from ledsim.montecarlo import run_jobs
-from ledsim.outputs import atomic_write_text
-from ledsim.results import to_jsonable, write_json
+from ledsim.loop.run_config import RunConfig
 
 ROOT = Path(__file__).resolve().parent.parent
 _N = NavigationNoise()

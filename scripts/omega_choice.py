@@ -14,9 +14,9 @@ from pathlib import Path
 
 import numpy as np
 
+from ledsim.files.outputs import atomic_write_text
 from ledsim.loop.closed_loop import run_once
-from ledsim.loop.config import RunConfig
-from ledsim.outputs import atomic_write_text
+from ledsim.loop.run_config import RunConfig
 
 ROOT = Path(__file__).resolve().parent.parent
 

@@ -15,7 +15,7 @@ from pathlib import Path
 
 os.environ.setdefault("MUJOCO_GL", "osmesa")
 
-from ledsim.loop.config import RunConfig  # noqa: E402
+from ledsim.loop.run_config import RunConfig  # noqa: E402
 from ledsim.loop.video import VideoSpec, render_video  # noqa: E402
 
 ROOT = Path(__file__).resolve().parent.parent

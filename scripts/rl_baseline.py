@@ -34,7 +34,7 @@ import tempfile
 import time
 from pathlib import Path
 
-from ledsim.montecarlo import WORKER_ENV  # imports no numpy
+from ledsim.experiment.montecarlo import WORKER_ENV  # imports no numpy
 
 os.environ.update(WORKER_ENV)  # one BLAS thread: the env is the cost, not the network
 os.environ.setdefault("MUJOCO_GL", "osmesa")
@@ -43,7 +43,7 @@ import numpy as np  # noqa: E402
 
 import ledsim.envs  # noqa: E402,F401 (registers the env)
 from ledsim.errors import LedsimError  # noqa: E402
-from ledsim.outputs import atomic_write_text, check_out_dir, output_folder  # noqa: E402
+from ledsim.files.outputs import atomic_write_text, check_out_dir, output_folder  # noqa: E402
 from ledsim.physics.disturbances import parse_disturbance  # noqa: E402
 
 EVAL_SEED0 = 100
@@ -222,7 +222,7 @@ def references(dist: tuple, seeds: int) -> dict:
     """The shipped stack's and the oracle's scores as policies of the same env, with
     the default acquisition (``shipped_kkl``, ``oracle``) and with each one named."""
     from ledsim.envs import ShippedAlignmentPolicy
-    from ledsim.loop.config import TaskPart
+    from ledsim.loop.run_config import TaskPart
 
     results = {}
     for name, estimator in (("shipped_kkl", "kkl"), ("oracle", "oracle")):
@@ -256,7 +256,7 @@ def reference_only(out: Path, seeds: int) -> int:
 def _plot(curves: dict, path: Path) -> None:
     from matplotlib.figure import Figure
 
-    from ledsim.outputs import atomic_write_bytes
+    from ledsim.files.outputs import atomic_write_bytes
 
     fig = Figure(figsize=(7, 4))
     ax = fig.add_subplot()

@@ -21,7 +21,7 @@ from pathlib import Path
 
 import numpy as np
 
-from ledsim.outputs import atomic_write_text
+from ledsim.files.outputs import atomic_write_text
 
 ROOT = Path(__file__).resolve().parent.parent
 #: The tables go between these lines of docs/rl.md; the text around them is kept.

@@ -23,10 +23,10 @@ os.environ.setdefault("MUJOCO_GL", "osmesa")
 
 from tqdm.auto import tqdm  # noqa: E402
 
-from ledsim.loop.config import RunConfig  # noqa: E402
+from ledsim.files.outputs import atomic_write_text  # noqa: E402
+from ledsim.files.resources import shipped_checkpoint  # noqa: E402
 from ledsim.loop.report import run_many  # noqa: E402
-from ledsim.outputs import atomic_write_text  # noqa: E402
-from ledsim.resources import shipped_checkpoint  # noqa: E402
+from ledsim.loop.run_config import RunConfig  # noqa: E402
 
 ROOT = Path(__file__).resolve().parents[1]
 
@@ -54,9 +54,9 @@ def measure(cfg: RunConfig, seeds: int) -> dict:
 
 def ablation_checkpoints(folder: Path) -> list[tuple[str, str]]:
     """Copies of the shipped scheduled checkpoint with one part changed."""
-    from ledsim.config import LinkConstants
+    from ledsim.constants import LinkConstants
+    from ledsim.physics.gimbal_system import GimbalSystem
     from ledsim.physics.scene import WorldConfig
-    from ledsim.physics.system import GimbalSystem
     from observer import checkpoint as ckpt
 
     src = shipped_checkpoint(0.085, "mujoco", design="scheduled")

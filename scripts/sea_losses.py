@@ -29,7 +29,7 @@ ROOT = Path(__file__).resolve().parent.parent
 sys.path.insert(0, str(ROOT))
 sys.path.insert(0, str(ROOT / "scripts"))
 
-from ledsim.montecarlo import pin_blas_threads  # noqa: E402
+from ledsim.experiment.montecarlo import pin_blas_threads  # noqa: E402
 
 pin_blas_threads()
 
@@ -84,11 +84,11 @@ def main() -> None:
     if args.minutes <= 0:
         ap.error(f"--minutes {args.minutes:g} is not allowed: must be > 0")
 
-    from ledsim.montecarlo import run_jobs
-    from ledsim.outputs import atomic_write_text
+    from ledsim.experiment.montecarlo import run_jobs
+    from ledsim.files.outputs import atomic_write_text
+    from ledsim.files.results import write_json
     from ledsim.radiometry.budget import range_at_fec
-    from ledsim.radiometry.presets import link_constants, preset_named
-    from ledsim.results import write_json
+    from ledsim.radiometry.link_presets import link_constants, preset_named
 
     reach = range_at_fec(link_constants("luma"), preset_named("luma").bit_rate)
     heights = {f"waves {h:g} m," for h in args.heights}

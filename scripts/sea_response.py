@@ -23,7 +23,7 @@ ROOT = Path(__file__).resolve().parent.parent
 
 
 def main() -> None:
-    from ledsim.outputs import atomic_write_text
+    from ledsim.files.outputs import atomic_write_text
     from ledsim.physics.wave_response import free_hull_response
 
     lines = ["# The hull in regular waves: strip theory beside linear theory", "",

@@ -60,10 +60,10 @@ def one(job) -> dict:
     import os
 
     os.environ.setdefault("MUJOCO_GL", "osmesa")
-    from ledsim.control import receiver_peak
+    from ledsim.agent.laws import receiver_peak
     from ledsim.loop.closed_loop import run_once
-    from ledsim.loop.config import RunConfig
-    from ledsim.optics import receiver_response_at
+    from ledsim.loop.run_config import RunConfig
+    from ledsim.radiometry.optics import receiver_response_at
 
     label, depth, d, disturbances, dome, est, imu, seed, seconds, link = job
     cfg = RunConfig(estimator=est, link=link, distance=d, depth=depth, imu=imu,
@@ -169,10 +169,10 @@ def main() -> None:
     args = ap.parse_args()
     from tqdm.auto import tqdm
 
-    from ledsim.outputs import atomic_write_text
+    from ledsim.files.outputs import atomic_write_text
+    from ledsim.files.results import write_json
     from ledsim.radiometry.budget import range_at_fec
-    from ledsim.radiometry.presets import link_constants, preset_named
-    from ledsim.results import write_json
+    from ledsim.radiometry.link_presets import link_constants, preset_named
 
     preset = preset_named(args.link)
     reach = range_at_fec(link_constants(args.link), preset.bit_rate)

@@ -76,7 +76,7 @@ def main() -> int:
     if args.long:
         summary["still_water"] = still_water(args.long)
         long_ok = summary["still_water"]["met"]
-    from ledsim.outputs import atomic_write_text
+    from ledsim.files.outputs import atomic_write_text
 
     atomic_write_text(ROOT / "out" / "soak.json", json.dumps(summary, indent=2) + "\n")
     print(f"hostile cases tried: {tried}, handled: {tried - failed} "
@@ -93,7 +93,7 @@ def main() -> int:
 def still_water(seconds: float) -> dict:
     """The long still-water case: the oracle, seed 0, a window a minute."""
     from ledsim.loop.closed_loop import run_once
-    from ledsim.loop.config import RunConfig
+    from ledsim.loop.run_config import RunConfig
 
     out = run_once(RunConfig(estimator="oracle", seconds=seconds), 0, window=60.0)
     later = out.windows[1:]

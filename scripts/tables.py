@@ -15,7 +15,7 @@ import argparse
 import json
 from pathlib import Path
 
-from ledsim.outputs import atomic_write_text
+from ledsim.files.outputs import atomic_write_text
 from ledsim.paper.evaluate import EvaluationConfig, evaluate, paper_reference, write_outputs
 
 ROOT = Path(__file__).resolve().parent.parent

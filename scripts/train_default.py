@@ -6,11 +6,11 @@ from __future__ import annotations
 
 import argparse
 
-from ledsim.config import LinkConstants
-from ledsim.outputs import save_checkpoint
+from ledsim.constants import LinkConstants
+from ledsim.experiment.observer_presets import observer_preset
+from ledsim.files.outputs import save_checkpoint
 from ledsim.paper.evaluate import default_checkpoint
 from ledsim.paper.model import LEDLinkModel
-from ledsim.presets import observer_preset
 from observer.training import train_kkl
 
 

@@ -7,7 +7,7 @@ into assets/checkpoints/kkl_mujoco_d<d>.safetensors.
 
 ``--lens`` trains the gain-scheduled KKL of the physical presets (``--link aquaoptical``
 and the others): the bench with their receiver's response and relative noise
-(``ledsim.radiometry.presets.kkl_reference_constants``), saved as
+(``ledsim.radiometry.link_presets.kkl_reference_constants``), saved as
 kkl_mujoco_scheduled_lens_d0.085.safetensors.
 
 ``--bank`` trains the bank the closed loop runs at every distance
@@ -22,11 +22,11 @@ import argparse
 import os
 
 from ledsim.cli.options import WORKERS
+from ledsim.files.outputs import save_checkpoint
+from ledsim.files.resources import shipped_checkpoint
 from ledsim.loop.estimation import BANK_NOISE, REFERENCE_DISTANCE
-from ledsim.loop.training import train_mujoco_observer
-from ledsim.outputs import save_checkpoint
-from ledsim.radiometry.presets import kkl_reference_constants
-from ledsim.resources import shipped_checkpoint
+from ledsim.loop.world_training import train_mujoco_observer
+from ledsim.radiometry.link_presets import kkl_reference_constants
 
 
 def main() -> None:

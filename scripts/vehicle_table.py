@@ -22,11 +22,11 @@ from __future__ import annotations
 import argparse
 from pathlib import Path
 
-from ledsim.loop.config import COMPARED_ESTIMATORS, RunConfig
+from ledsim.files.outputs import atomic_write_text
+from ledsim.files.results import to_jsonable, write_json
 from ledsim.loop.report import run_many
+from ledsim.loop.run_config import COMPARED_ESTIMATORS, RunConfig
 from ledsim.loop.table import TABLE_HEADER, format_summary
-from ledsim.outputs import atomic_write_text
-from ledsim.results import to_jsonable, write_json
 
 ROOT = Path(__file__).resolve().parent.parent
 HEADINGS = (("0", 0.0), ("pi/2", 1.5708), ("pi", 3.1416))

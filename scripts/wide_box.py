@@ -15,14 +15,14 @@ import argparse
 
 import numpy as np
 
-from ledsim.config import LinkConstants
+from ledsim.constants import LinkConstants
+from ledsim.experiment.observer_presets import observer_preset
+from ledsim.files.outputs import save_checkpoint
 from ledsim.loop.closed_loop import run_once
-from ledsim.loop.config import RunConfig
 from ledsim.loop.report import run_many
-from ledsim.outputs import save_checkpoint
-from ledsim.physics import system as physics_system
+from ledsim.loop.run_config import RunConfig
+from ledsim.physics import gimbal_system as physics_system
 from ledsim.physics.scene import WorldConfig
-from ledsim.presets import observer_preset
 from observer.training import generate_transitions, train_kkl
 
 CASES = {"undisturbed": (), "vibration 1 Hz high": ("vibration:frequency=1,torque=1,force=4",)}

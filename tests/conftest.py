@@ -7,7 +7,7 @@ os.environ.setdefault("MUJOCO_GL", "osmesa")
 import numpy as np  # noqa: E402
 import pytest  # noqa: E402
 
-from ledsim.config import LinkConstants  # noqa: E402
+from ledsim.constants import LinkConstants  # noqa: E402
 from ledsim.paper.model import LEDLinkModel  # noqa: E402
 
 
@@ -33,7 +33,7 @@ def system():
 @pytest.fixture(scope="session")
 def tiny_observer(system):
     """A small KKL observer trained in a few seconds (default recipe, fewer samples)."""
-    from ledsim.presets import observer_preset
+    from ledsim.experiment.observer_presets import observer_preset
     from observer.training import train_kkl
 
     design, cfg = observer_preset("default", system.Te)

@@ -3,7 +3,7 @@
 import numpy as np
 import pytest
 
-from ledsim.config import LinkConstants
+from ledsim.constants import LinkConstants
 from ledsim.paper.model import LEDLinkModel
 from observer.bank import ObserverBank
 from observer.errors import ObserverError

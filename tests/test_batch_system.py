@@ -5,7 +5,7 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from ledsim.physics.system import GimbalSystem
+from ledsim.physics.gimbal_system import GimbalSystem
 from ledsim.physics.world import WorldError
 
 

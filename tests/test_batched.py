@@ -8,8 +8,8 @@ import numpy as np
 import pytest
 
 from ledsim.loop.closed_loop import ClosedLoop, run_batch, run_once
-from ledsim.loop.config import RunConfig
 from ledsim.loop.report import run_many
+from ledsim.loop.run_config import RunConfig
 from ledsim.physics.batch import WorldBatch
 from ledsim.physics.batch_sensor import BatchSensor
 from ledsim.physics.disturbances import parse_disturbance

@@ -16,7 +16,7 @@ import bench_floor  # noqa: E402
 @pytest.fixture(scope="module")
 def estimators():
     from ledsim.loop.closed_loop import ClosedLoop
-    from ledsim.loop.config import RunConfig
+    from ledsim.loop.run_config import RunConfig
 
     cfg = RunConfig(scenario="align", estimator="kkl", supervision=True, seconds=0.3)
     loop = ClosedLoop(cfg, range(3))

@@ -10,10 +10,10 @@ from conftest import assert_user_error, run_cli
 
 from ledsim.cli import main
 from ledsim.loop.closed_loop import run_once
-from ledsim.loop.config import RunConfig
 from ledsim.loop.report import run_seeds
-from ledsim.paper.bound import pointing_loss
+from ledsim.loop.run_config import RunConfig
 from ledsim.paper.evaluate import EvaluationConfig, evaluate
+from ledsim.paper.pcrb_tables import pointing_loss
 from observer.metrics import pointing_loss_db
 
 

@@ -3,7 +3,7 @@ import copy
 import numpy as np
 import pytest
 
-from ledsim.config import LinkConstants
+from ledsim.constants import LinkConstants
 from ledsim.paper.evaluate import default_checkpoint
 from ledsim.paper.model import LEDLinkModel
 from ledsim.paper.scenarios import Noise, get_scenario, run

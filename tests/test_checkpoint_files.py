@@ -15,7 +15,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from ledsim.resources import checkpoint_dir, shipped_checkpoint
+from ledsim.files.resources import checkpoint_dir, shipped_checkpoint
 from observer import checkpoint
 
 #: sha256 (its first 128 bits) of each shipped checkpoint's format, metadata and arrays

@@ -171,7 +171,7 @@ def test_outputs_are_all_or_nothing(tmp_path, monkeypatch):
     def broken_plot(*args, **kwargs):
         raise KeyboardInterrupt  # as if Ctrl-C hit between results.json and run.png
 
-    monkeypatch.setattr("ledsim.plotting.plot_run", broken_plot)
+    monkeypatch.setattr("ledsim.experiment.plotting.plot_run", broken_plot)
     out = tmp_path / "run"
     code = main(["run", "--estimator", "oracle", "--seeds", "1", "--seconds", "1",
                  "--out", str(out)])
@@ -232,7 +232,7 @@ def test_train_design_deep_trains_a_gradient_decoder_of_two_layers(tmp_path):
     out = tmp_path / "deep.pt"
     r = run_cli("train", "--design", "deep", "--samples", "1000", "-q", "--out", str(out))
     assert r.returncode == 0, r.stderr
-    from ledsim.config import LinkConstants
+    from ledsim.constants import LinkConstants
 
     obs = checkpoint.load(out, LEDLinkModel(LinkConstants()))
     assert len(obs.decoder_T_star.mid) == 1

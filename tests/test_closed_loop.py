@@ -2,9 +2,9 @@ import numpy as np
 import pytest
 
 from ledsim.loop.closed_loop import run_once
-from ledsim.loop.config import RunConfig
-from ledsim.loop.metrics import first_settled
-from ledsim.physics.system import GimbalSystem, IdentifiedGimbalModel
+from ledsim.loop.run_config import RunConfig
+from ledsim.loop.run_metrics import first_settled
+from ledsim.physics.gimbal_system import GimbalSystem, IdentifiedGimbalModel
 
 
 @pytest.fixture(scope="module")

@@ -4,9 +4,9 @@
 import numpy as np
 import pytest
 
-from ledsim.estimators import ESTIMATORS, build_estimator
+from ledsim.experiment.estimators import ESTIMATORS, build_estimator
 from ledsim.loop.closed_loop import run_once
-from ledsim.loop.config import LOOP_ESTIMATORS, RunConfig
+from ledsim.loop.run_config import LOOP_ESTIMATORS, RunConfig
 from ledsim.paper.evaluate import default_checkpoint
 from ledsim.paper.scenarios import Noise, get_scenario, run
 from ledsim.physics.disturbances import DISTURBANCES
@@ -32,7 +32,7 @@ def test_every_disturbance_has_a_short_spec():
 def paper_run(system, name, seed):
     d = 0.085
     if name == "kkl-handover":  # its slow half is shipped for d = 0.1 and 0.2 m
-        from ledsim.config import LinkConstants
+        from ledsim.constants import LinkConstants
         from ledsim.paper.model import LEDLinkModel
 
         d = 0.1

@@ -12,7 +12,7 @@ from ledsim.envs import ENV_ID
 
 def _raw_share(env) -> float:
     """The reward before the cut of round-off at 1: power over the achievable power."""
-    from ledsim.optics import achievable_power
+    from ledsim.radiometry.optics import achievable_power
 
     r = env.reading
     best = achievable_power(r.distance[0], r.emission_angle[0], env.system.constants,

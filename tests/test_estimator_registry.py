@@ -3,7 +3,7 @@
 import pytest
 
 from ledsim.errors import LedsimError
-from ledsim.estimators import (
+from ledsim.experiment.estimators import (
     CLOSED_FORM_ESTIMATORS,
     COMPARED_ESTIMATORS,
     ESTIMATORS,
@@ -15,7 +15,8 @@ from ledsim.estimators import (
 
 
 def test_the_lists_are_the_registrys_and_keep_their_old_names_and_order():
-    from ledsim.loop import config, estimation, validation
+    from ledsim.loop import estimation, validation
+    from ledsim.loop import run_config as config
     from ledsim.paper import evaluate
 
     assert list(ESTIMATORS) == [e.name for e in REGISTRY]
@@ -48,8 +49,8 @@ def test_an_unknown_estimator_is_one_line_naming_the_choices():
 def test_a_link_preset_names_the_designs_its_run_loads():
     # Issue 47: what differs between the bench and a physical link is asked of the
     # preset, not of its name; the shipped checkpoints it names exist.
-    from ledsim.radiometry.presets import LINK_PRESETS
-    from ledsim.resources import require_shipped_checkpoint
+    from ledsim.files.resources import require_shipped_checkpoint
+    from ledsim.radiometry.link_presets import LINK_PRESETS
 
     for name, p in LINK_PRESETS.items():
         bench = name == "paper"

@@ -46,11 +46,11 @@ def test_the_closed_form_step_matches_numpy_with_inputs_and_dropouts():
 
 
 def test_ledsim_export_writes_the_shipped_mujoco_step(tmp_path):
-    from ledsim.estimators import build_estimator
+    from ledsim.experiment.estimators import build_estimator
+    from ledsim.files.resources import require_shipped_checkpoint
     from ledsim.loop.closed_loop import identified_model, run_once
-    from ledsim.loop.config import RunConfig
-    from ledsim.physics.system import GimbalSystem
-    from ledsim.resources import require_shipped_checkpoint
+    from ledsim.loop.run_config import RunConfig
+    from ledsim.physics.gimbal_system import GimbalSystem
 
     out = tmp_path / "kkl.onnx"
     r = run_cli("export", "--format", "onnx", "--out", str(out), "-q")

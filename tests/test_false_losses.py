@@ -10,13 +10,13 @@ import numpy as np
 import pytest
 from conftest import run_cli
 
-from ledsim.config import LinkConstants
-from ledsim.loop.config import RunConfig
+from ledsim.constants import LinkConstants
 from ledsim.loop.losses import FALSE_LOSS_ERROR, loss_onsets, step_flags
-from ledsim.loop.metrics import run_metrics
+from ledsim.loop.run_config import RunConfig
+from ledsim.loop.run_metrics import run_metrics
 from ledsim.loop.windows import window_metrics
-from ledsim.optics import pair_phi_variance, pair_power, pair_shape_inverse
 from ledsim.paper.model import LEDLinkModel
+from ledsim.radiometry.optics import pair_phi_variance, pair_power, pair_shape_inverse
 from observer.gain_tracking import GainTracker
 from observer.gimbal_load import LoadObserver
 from observer.supervision import ResidualMonitor

@@ -44,19 +44,19 @@ import pytest
 from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
+import ledsim.experiment.montecarlo
+import ledsim.files.results
 import ledsim.loop.report
 import ledsim.loop.table
 import ledsim.loop.video
-import ledsim.montecarlo
 import ledsim.paper.evaluate
 import ledsim.physics.simulation
-import ledsim.results
 import observer.training
+from ledsim.agent.autopilot import StationKeeping
 from ledsim.cli import CAMERAS, build_parser, main
-from ledsim.config import PAPER_DISTANCE, NavigationNoise
+from ledsim.constants import PAPER_DISTANCE, NavigationNoise
+from ledsim.files.resources import scene_path, shipped_checkpoint
 from ledsim.physics.disturbances import DISTURBANCES, RANGES
-from ledsim.physics.vehicle import StationKeeping
-from ledsim.resources import scene_path, shipped_checkpoint
 
 SOAK = int(os.environ.get("LEDSIM_SOAK", "1"))
 REAL = os.environ.get("LEDSIM_FUZZ_REAL", "") not in ("", "0")
@@ -310,12 +310,12 @@ def stubs(command: str) -> list[tuple[object, str, object]]:
         "simulate": [] if real else [(ledsim.physics.simulation, "simulate", _started)],
         "run": [] if real else [(report, "run_jobs", _started)],
         "render": [(video, "render_video", _started)],
-        "sweep": [(ledsim.montecarlo, "run_jobs_ray", _started)] + (
-            [] if real else [(ledsim.montecarlo, "run_jobs", _started)]),
+        "sweep": [(ledsim.experiment.montecarlo, "run_jobs_ray", _started)] + (
+            [] if real else [(ledsim.experiment.montecarlo, "run_jobs", _started)]),
         "demo": [(report, "run_jobs", _started), (report, "run_many", _run_many_checked),
                  (report, "write_run", lambda *a, **k: []),
                  (ledsim.loop.table, "format_summary", lambda *a, **k: "| row |"),
-                 (ledsim.results, "write_json", lambda *a, **k: None),
+                 (ledsim.files.results, "write_json", lambda *a, **k: None),
                  (video, "render_video", _started)],
     }.get(command, [])
 

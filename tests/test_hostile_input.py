@@ -84,7 +84,7 @@ def test_a_pickle_with_a_payload_is_refused_in_one_line(tmp_path, protocol):
 def test_the_scene_needs_room_for_both_housings_but_the_budget_goes_closer():
     """MIN_DISTANCE binds the MuJoCo scene (and the --distance flag), not the radiometry:
     ``ledsim budget`` searches for its range below it."""
-    from ledsim.config import MIN_DISTANCE, LinkConstants
+    from ledsim.constants import MIN_DISTANCE, LinkConstants
     from ledsim.physics.scene import WorldConfig
     from ledsim.radiometry.budget import budget_report
 
@@ -137,8 +137,8 @@ def test_a_link_no_run_can_use_is_refused_before_it_starts(tmp_path, args, needl
 def test_a_lost_link_at_twice_its_range_still_runs():
     """The dark-receiver floor leaves the lost links people study: twice the FEC range
     in murky water (peak SNR 2e-4) validates."""
-    from ledsim.loop.config import RunConfig
     from ledsim.loop.registry import MIN_RUN_PEAK_SNR, peak_snr
+    from ledsim.loop.run_config import RunConfig
 
     cfg = RunConfig(link="luma", attenuation=16.0, distance=2.08, estimator="ekf")
     cfg.validate()

@@ -10,7 +10,7 @@ import ledsim.envs  # noqa: F401 (registers the env)
 from ledsim.cli.parser import build_parser
 from ledsim.errors import LedsimError
 from ledsim.loop.closed_loop import run_once
-from ledsim.loop.config import RunConfig
+from ledsim.loop.run_config import RunConfig
 
 
 def test_the_config_starts_where_it_is_told():

@@ -8,11 +8,11 @@ import math
 import numpy as np
 import pytest
 
-from ledsim.config import NavigationNoise
+from ledsim.agent.autopilot import Vehicle
+from ledsim.constants import NavigationNoise
 from ledsim.physics.disturbances import DisturbanceError, parse_disturbance
-from ledsim.physics.navigation import NavigationSensor
+from ledsim.physics.nav_sensors import NavigationSensor
 from ledsim.physics.tick import advance, prepare
-from ledsim.physics.vehicle import Vehicle
 from ledsim.physics.world import LinkWorld
 from observer.ins import InsState
 from observer.rotations import rotation_exp, rotation_log
@@ -226,7 +226,7 @@ def test_a_fix_error_grows_with_the_range_to_the_transceiver():
                                  dict(fix_outlier_size=float("nan")),
                                  dict(magnetometer_rate=0.0)])
 def test_the_faults_figures_are_checked(bad):
-    from ledsim.config import ConfigError
+    from ledsim.constants import ConfigError
 
     with pytest.raises(ConfigError, match=next(iter(bad))):
         NavigationNoise(**bad)

@@ -56,7 +56,7 @@ def test_two_renders_to_one_file_never_share_a_temporary(tmp_path):
 def test_a_swallowed_interrupt_still_commits_nothing(tmp_path):
     # Python ignores a KeyboardInterrupt raised in some callbacks (an import lock's), so
     # the work can finish after a Ctrl-C: the flag the handler sets stops the commit.
-    from ledsim.outputs import INTERRUPTED, atomic_write_text, output_folder
+    from ledsim.files.outputs import INTERRUPTED, atomic_write_text, output_folder
 
     INTERRUPTED.set()
     try:
@@ -97,7 +97,7 @@ def _flag_and_raise(signum, frame):
     # As ledsim's own handler does: the flag also stops the work where Python swallows
     # the KeyboardInterrupt (raised inside a finalizer that the collector runs, which a
     # suite's large process does often enough to fail this test now and then).
-    from ledsim.outputs import INTERRUPTED
+    from ledsim.files.outputs import INTERRUPTED
 
     INTERRUPTED.set()
     raise KeyboardInterrupt
@@ -107,8 +107,8 @@ def test_ctrl_c_stops_run_jobs_workers_at_once():
     import multiprocessing
     import threading
 
-    import ledsim.montecarlo as mc
-    from ledsim.outputs import INTERRUPTED
+    import ledsim.experiment.montecarlo as mc
+    from ledsim.files.outputs import INTERRUPTED
 
     previous = signal.signal(signal.SIGINT, _flag_and_raise)
     threading.Timer(1.0, os.kill, (os.getpid(), signal.SIGINT)).start()
@@ -126,7 +126,7 @@ def test_ctrl_c_stops_run_jobs_workers_at_once():
 def test_ctrl_c_while_the_workers_start_leaves_none_behind(monkeypatch):
     import multiprocessing
 
-    import ledsim.montecarlo as mc
+    import ledsim.experiment.montecarlo as mc
 
     real_start = multiprocessing.process.BaseProcess.start
 
@@ -134,7 +134,7 @@ def test_ctrl_c_while_the_workers_start_leaves_none_behind(monkeypatch):
         real_start(self)
         os.kill(os.getpid(), signal.SIGINT)  # between this fork and the next
 
-    from ledsim.outputs import INTERRUPTED
+    from ledsim.files.outputs import INTERRUPTED
 
     monkeypatch.setattr(multiprocessing.process.BaseProcess, "start", start_then_ctrl_c)
     previous = signal.signal(signal.SIGINT, _flag_and_raise)  # ledsim's, see above
@@ -150,7 +150,7 @@ def test_ctrl_c_while_the_workers_start_leaves_none_behind(monkeypatch):
 def test_a_failed_job_stops_the_workers_and_raises_its_own_error():
     import multiprocessing
 
-    import ledsim.montecarlo as mc
+    import ledsim.experiment.montecarlo as mc
     from ledsim.errors import LedsimError
 
     t0 = time.perf_counter()
@@ -162,14 +162,14 @@ def test_a_failed_job_stops_the_workers_and_raises_its_own_error():
 
 
 def test_a_worker_that_dies_is_an_error_not_a_hang():
-    import ledsim.montecarlo as mc
+    import ledsim.experiment.montecarlo as mc
 
     with pytest.raises(mc.WorkerDied, match="died while running job 0"):
         mc.run_jobs(_die, [0, 1], workers=2, progress=False)
 
 
 def test_results_do_not_depend_on_the_workers():
-    import ledsim.montecarlo as mc
+    import ledsim.experiment.montecarlo as mc
 
     seeds = list(range(7))
     seen = []
@@ -310,7 +310,7 @@ def test_ctrl_c_ends_a_run_with_workers_within_2_s_at_any_moment(tmp_path, finis
 
 
 def test_a_failed_output_folder_takes_away_the_folders_made_for_it(tmp_path):
-    from ledsim.outputs import output_folder
+    from ledsim.files.outputs import output_folder
 
     (tmp_path / "kept").mkdir()
     with pytest.raises(RuntimeError):

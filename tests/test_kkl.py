@@ -51,7 +51,7 @@ def test_deep_numpy_export_matches_torch(rng, layers):
 
 
 def test_deep_warm_started_decoder_trains_saves_and_loads(system, tmp_path):
-    from ledsim.presets import observer_preset
+    from ledsim.experiment.observer_presets import observer_preset
     from observer import checkpoint
     from observer.training import train_kkl
 
@@ -146,8 +146,8 @@ def test_missing_measurements_never_enter_z(tiny_observer, system, bad):
 
 
 def test_handover_seeds_the_slow_bank_from_the_fast_estimate():
-    from ledsim.config import LinkConstants
-    from ledsim.estimators import build_estimator
+    from ledsim.constants import LinkConstants
+    from ledsim.experiment.estimators import build_estimator
     from ledsim.paper.evaluate import default_checkpoint
     from ledsim.paper.model import LEDLinkModel
 

@@ -9,7 +9,7 @@ import numpy as np
 import pytest
 from conftest import run_cli
 
-from ledsim.linkbudget import BIT_RATE, FEC_LIMIT, ber_ook, link_budget, snr
+from ledsim.radiometry.data_channel import BIT_RATE, FEC_LIMIT, ber_ook, link_budget, snr
 
 
 def test_ook_ber_is_q_of_half_the_amplitude_over_sigma():
@@ -51,7 +51,7 @@ def test_a_run_budget_counts_the_steps_under_the_fec_limit():
 @pytest.mark.parametrize("link", ["paper", None])
 def test_ledsim_run_writes_the_link_budget(tmp_path, link):
     """On the bench (1 kbit/s) and on the default physical link (its preset's rate)."""
-    from ledsim.radiometry.presets import DEFAULT_LINK, LINK_PRESETS
+    from ledsim.radiometry.link_presets import DEFAULT_LINK, LINK_PRESETS
 
     flags = [] if link is None else ["--link", link]
     r = run_cli("run", "--seeds", "2", "--seconds", "6", "--workers", "1", "--no-plot",

@@ -11,9 +11,9 @@ import numpy as np
 import pytest
 from conftest import assert_user_error, run_cli
 
-from ledsim.config import LinkConstants
+from ledsim.constants import LinkConstants
 from ledsim.loop.closed_loop import run_once
-from ledsim.loop.config import RunConfig
+from ledsim.loop.run_config import RunConfig
 from ledsim.loop.windows import window_metrics
 from ledsim.physics.disturbances import DisturbanceError, parse_disturbance
 
@@ -139,7 +139,7 @@ def test_a_repeated_key_is_refused_in_the_library_too():
 def test_an_imu_less_scene_names_only_what_it_lacks_and_records_what_ran(tmp_path):
     import mujoco
 
-    from ledsim.resources import scene_path
+    from ledsim.files.resources import scene_path
 
     spec = mujoco.MjSpec.from_file(str(scene_path()))
     for s in list(spec.sensors):

@@ -3,9 +3,13 @@ import math
 import numpy as np
 import pytest
 
-from ledsim.config import ConfigError, LinkConstants
-from ledsim.optics import photodiode_power, receiver_response, receiver_response_derivative
+from ledsim.constants import ConfigError, LinkConstants
 from ledsim.paper.model import LEDLinkModel
+from ledsim.radiometry.optics import (
+    photodiode_power,
+    receiver_response,
+    receiver_response_derivative,
+)
 
 
 def test_power_matches_paper_formula_evaluated_by_hand():

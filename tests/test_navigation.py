@@ -9,9 +9,9 @@ import mujoco
 import numpy as np
 import pytest
 
-from ledsim.config import ConfigError, NavigationNoise
+from ledsim.constants import ConfigError, NavigationNoise
 from ledsim.physics.disturbances import parse_disturbance
-from ledsim.physics.navigation import NavigationSensor
+from ledsim.physics.nav_sensors import NavigationSensor
 from ledsim.physics.scene import SCENE, WorldConfig
 from ledsim.physics.tick import advance, prepare
 from ledsim.physics.world import LinkWorld, WorldError

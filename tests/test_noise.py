@@ -4,10 +4,10 @@ budget read the same :class:`~observer.noise.MeasurementNoise`."""
 import numpy as np
 import pytest
 
-from ledsim.config import LinkConstants
+from ledsim.constants import LinkConstants
 from ledsim.envs.link_align import LinkAlignEnv
 from ledsim.loop.closed_loop import ClosedLoop
-from ledsim.loop.config import RunConfig
+from ledsim.loop.run_config import RunConfig
 from observer.noise import MeasurementNoise
 
 

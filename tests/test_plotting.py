@@ -2,8 +2,8 @@
 
 import numpy as np
 
+from ledsim.experiment.plotting import plot_estimates, plot_powers, plot_powers_by_distance
 from ledsim.paper.scenarios import Trajectory
-from ledsim.plotting import plot_estimates, plot_powers, plot_powers_by_distance
 
 
 def fake_trajectory(scale: float) -> Trajectory:

@@ -5,7 +5,7 @@ import time
 
 import pytest
 
-import ledsim.montecarlo as mc
+import ledsim.experiment.montecarlo as mc
 
 
 class _Bar:
@@ -51,7 +51,7 @@ def test_report_outside_a_job_does_nothing():
 
 def test_the_closed_loop_reports_its_share(monkeypatch):
     from ledsim.loop.closed_loop import ClosedLoop
-    from ledsim.loop.config import RunConfig
+    from ledsim.loop.run_config import RunConfig
 
     seen = []
     monkeypatch.setattr(mc, "_REPORT", seen.append)

@@ -7,13 +7,20 @@ import numpy as np
 import pytest
 from conftest import assert_user_error, run_cli
 
-from ledsim.config import LinkConstants
-from ledsim.linkbudget import FEC_LIMIT, ber_ook, link_budget, link_budget_of, snr, snr_at
-from ledsim.optics import photodiode_power
+from ledsim.constants import LinkConstants
 from ledsim.radiometry.budget import budget_report, range_at_fec
+from ledsim.radiometry.data_channel import (
+    FEC_LIMIT,
+    ber_ook,
+    link_budget,
+    link_budget_of,
+    snr,
+    snr_at,
+)
 from ledsim.radiometry.hardware import ELEMENTARY_CHARGE
 from ledsim.radiometry.link import constants_from_dict
-from ledsim.radiometry.presets import LINK_PRESETS, link_constants
+from ledsim.radiometry.link_presets import LINK_PRESETS, link_constants
+from ledsim.radiometry.optics import photodiode_power
 from ledsim.radiometry.water import WATER_TYPES, Water, pure_water_absorption
 from observer.noise import Digitiser, MeasurementNoise
 
@@ -182,7 +189,7 @@ def test_a_physical_link_runs_and_a_seed_does_not_depend_on_its_batch():
     """The signal-dependent draw (shot noise and the ADC) in the batch's sensor and the
     single run's: the same numbers for a seed, alone or beside another."""
     from ledsim.loop.closed_loop import run_batch, run_once
-    from ledsim.loop.config import RunConfig
+    from ledsim.loop.run_config import RunConfig
 
     cfg = RunConfig(estimator="ekf", link="aquaoptical", water="coastal", distance=15.0,
                     seconds=1.5, seeds=2)
@@ -212,11 +219,11 @@ def test_the_benchs_observers_refuse_a_physical_link(tmp_path):
 
 
 def test_the_gain_trackers_deadband_follows_the_link():
-    from ledsim.loop.link_gain import BENCH_DEADBAND, tracker_deadband
+    from ledsim.agent.link_gain import BENCH_DEADBAND, tracker_deadband
 
     assert tracker_deadband(LinkConstants()) == BENCH_DEADBAND
     assert tracker_deadband(LinkConstants(distance=0.05)) == BENCH_DEADBAND
-    from ledsim.optics import nominal_noise_std, peak_power
+    from ledsim.radiometry.optics import nominal_noise_std, peak_power
 
     bench = LinkConstants().measurement_noise_std / peak_power(LinkConstants())
     for d in (6.0, 10.0, 30.0, 60.0):  # in proportion to the samples' relative noise
@@ -230,7 +237,7 @@ def test_the_physical_kkl_runs_on_every_preset():
     """The shipped scheduled KKL of the physical receiver loads for each preset (its
     metadata checked against the reference world) and aligns a short run."""
     from ledsim.loop.closed_loop import run_once
-    from ledsim.loop.config import RunConfig
+    from ledsim.loop.run_config import RunConfig
 
     for name in ("aquaoptical", "bluecomm-200"):
         cfg = RunConfig(estimator="kkl", link=name, seconds=3.0, seeds=1)

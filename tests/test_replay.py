@@ -9,10 +9,10 @@ import numpy as np
 import pytest
 from conftest import assert_user_error, run_cli
 
+from ledsim.files.resources import require_shipped_checkpoint
 from ledsim.loop.closed_loop import run_once
-from ledsim.loop.config import RunConfig
 from ledsim.loop.replay import ReplayError, replay
-from ledsim.resources import require_shipped_checkpoint
+from ledsim.loop.run_config import RunConfig
 
 OCCLUSION = ("occlusion:start=2,duration=1",)
 

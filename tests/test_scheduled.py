@@ -6,7 +6,7 @@ import numpy as np
 import pytest
 from conftest import assert_user_error, run_cli
 
-from ledsim.config import LinkConstants
+from ledsim.constants import LinkConstants
 from ledsim.paper.model import LEDLinkModel
 from observer import checkpoint as ckpt
 from observer.errors import ObserverError
@@ -177,7 +177,7 @@ def test_kkl_scheduled_without_supervision_elsewhere_is_refused(tmp_path):
 def test_the_shipped_checkpoint_is_what_train_design_scheduled_makes():
     from dataclasses import asdict
 
-    from ledsim.resources import shipped_checkpoint
+    from ledsim.files.resources import shipped_checkpoint
 
     meta = ckpt.metadata(shipped_checkpoint(0.085, "mujoco", design="scheduled"))
     assert asdict(GainSchedule(**meta["schedule"])) == asdict(GainSchedule())

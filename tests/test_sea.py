@@ -7,12 +7,12 @@ import re
 import numpy as np
 import pytest
 
-from ledsim.config import GRAVITY
+from ledsim.constants import GRAVITY
 from ledsim.physics.disturbances import DisturbanceError, parse_disturbance
 from ledsim.physics.linear_waves import RegularWave, wavenumber
 from ledsim.physics.scene import WorldConfig, WorldError
 from ledsim.physics.world import LinkWorld
-from ledsim.radiometry.presets import link_constants
+from ledsim.radiometry.link_presets import link_constants
 
 
 def test_dispersion_relation_in_deep_and_finite_water():
@@ -97,7 +97,7 @@ def test_a_wave_steeper_than_it_can_stand_is_refused(spec, needle):
 
 
 def test_the_steepest_wave_that_stands_is_accepted():
-    from ledsim.physics.water import BREAKING_STEEPNESS
+    from ledsim.physics.flow import BREAKING_STEEPNESS
 
     for sea in (0.0, 12.0, 200.0):
         wave = parse_disturbance(f"waves:period=5,sea_depth={sea:g}").wave
@@ -118,14 +118,14 @@ def test_the_steepest_wave_that_stands_is_accepted():
 ])
 def test_a_trough_below_the_vehicle_or_the_led_is_refused_up_front(settings, needle):
     from ledsim.errors import LedsimError
-    from ledsim.loop.config import RunConfig
+    from ledsim.loop.run_config import RunConfig
 
     with pytest.raises(LedsimError, match=re.escape(needle)):
         RunConfig(estimator="ekf", seconds=1.0, **settings).validate()
 
 
 def test_a_trough_that_passes_over_both_vehicles_is_accepted():
-    from ledsim.loop.config import RunConfig
+    from ledsim.loop.run_config import RunConfig
 
     RunConfig(estimator="ekf", seconds=1.0, depth=3.0,
               disturbances=("waves:height=5.7,period=12",)).validate()
@@ -140,7 +140,7 @@ def test_the_clearances_are_the_tops_of_the_hull_and_the_led_in_the_scene():
     half."""
     import mujoco
 
-    from ledsim.physics.water import HULL_CLEARANCE, LED_CLEARANCE
+    from ledsim.physics.flow import HULL_CLEARANCE, LED_CLEARANCE
 
     world = LinkWorld(WorldConfig())
     m, d = world.model, world.data
@@ -238,8 +238,8 @@ def test_bad_light_keys_are_refused(text):
 
 def test_a_fade_is_not_a_pointing_loss():
     """The oracle points perfectly: fades leave its availability as it was."""
-    from ledsim.loop.config import RunConfig
     from ledsim.loop.report import run_many
+    from ledsim.loop.run_config import RunConfig
 
     def availability(*disturbances):
         cfg = RunConfig(estimator="oracle", link="luma", seconds=3.0,
@@ -306,9 +306,9 @@ def test_the_receiver_dome_takes_the_head_out_of_the_flow():
 
 
 def test_the_run_reports_its_depths():
-    from ledsim.loop.config import RunConfig
+    from ledsim.files.results import to_jsonable
     from ledsim.loop.report import run_many
-    from ledsim.results import to_jsonable
+    from ledsim.loop.run_config import RunConfig
 
     cfg = RunConfig(estimator="ekf", link="luma", seconds=1.0, seeds=1, depth=3.0,
                     transmitter_depth=2.5, receiver_dome=True)
@@ -320,7 +320,7 @@ def test_the_run_reports_its_depths():
 
 def test_the_env_and_the_sweep_refuse_an_impossible_sea(tmp_path):
     from ledsim.envs.link_align import LinkAlignEnv
-    from ledsim.loop.config import RunConfig
+    from ledsim.loop.run_config import RunConfig
     from ledsim.loop.sweep import SweepGrid
 
     with pytest.raises(DisturbanceError, match="steeper than a wave can stand"):

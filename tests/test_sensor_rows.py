@@ -16,11 +16,11 @@ import pytest
 import ledsim.envs  # noqa: F401 (registers the ids)
 import ledsim.physics.sensor_rows as sensor_rows
 from ledsim.loop.closed_loop import ClosedLoop
-from ledsim.loop.config import RunConfig
-from ledsim.optics import receiver_response_at, transmitter_gain_at
+from ledsim.loop.run_config import RunConfig
 from ledsim.physics.incidence import incidence_geometry, incidence_rate
 from ledsim.physics.sensor_rows import SensorRows
 from ledsim.physics.tick import prepare
+from ledsim.radiometry.optics import receiver_response_at, transmitter_gain_at
 from observer.rowops import ARRAYS, FLOATS
 
 warnings.filterwarnings("ignore", message=".*out of date.*")

@@ -7,12 +7,12 @@ import numpy as np
 import pytest
 from conftest import assert_user_error, run_cli
 
-from ledsim.config import LinkConstants
-from ledsim.control import intensity_maximum
+from ledsim.agent.laws import intensity_maximum
+from ledsim.agent.slew import BeamFix, TimeOptimalSlew
+from ledsim.constants import LinkConstants
 from ledsim.loop.closed_loop import run_once
-from ledsim.loop.config import RunConfig
-from ledsim.loop.slew import BeamFix, TimeOptimalSlew
-from ledsim.optics import layout_power
+from ledsim.loop.run_config import RunConfig
+from ledsim.radiometry.optics import layout_power
 
 C = LinkConstants()
 INERTIA, LIMIT = 2.09e-4, 0.05  # the shipped gimbal's [kg m^2], [N m]

@@ -7,13 +7,13 @@ import numpy as np
 import pytest
 from conftest import run_cli
 
-from ledsim.config import LinkConstants
+from ledsim.agent.acquisition import fit_incidence_angle
+from ledsim.constants import LinkConstants
 from ledsim.errors import LedsimError
-from ledsim.loop.acquisition import fit_incidence_angle
-from ledsim.loop.config import RunConfig
-from ledsim.loop.metrics import link_events
-from ledsim.optics import _SHAPE_PHI, _shape_table, pair_power, pair_shape_inverse
+from ledsim.loop.run_config import RunConfig
+from ledsim.loop.run_metrics import link_events
 from ledsim.paper.model import LEDLinkModel
+from ledsim.radiometry.optics import _SHAPE_PHI, _shape_table, pair_power, pair_shape_inverse
 from observer.gain_tracking import GainTracker
 from observer.supervision import ResidualMonitor
 
@@ -192,7 +192,7 @@ def test_cli_run_writes_loss_and_recovery_times(tmp_path):
 
 
 def test_detection_delay_counts_a_loss_already_on_at_the_event():
-    from ledsim.loop.metrics import run_metrics
+    from ledsim.loop.run_metrics import run_metrics
 
     n = 400
     x = np.zeros((n, 2))
@@ -233,7 +233,7 @@ def test_a_fast_kick_is_flagged_at_once_and_recovered():
 
 
 def test_the_gate_holds_a_dropout_then_passes_a_blackout_on():
-    from ledsim.loop.gate import DropoutGate
+    from ledsim.agent.gate import DropoutGate
 
     gate = DropoutGate(C, max_hold=0.5)  # 50 steps of 10 ms
     lit, dark = np.array([1.0, 0.9]), np.array([0.0, 0.0])
@@ -292,8 +292,8 @@ def test_the_scheduled_kkl_is_told_the_noise_of_a_far_link():
 
 
 def test_a_confident_wrong_estimate_is_counted_as_a_silent_error():
-    from ledsim.config import LinkConstants
-    from ledsim.loop.metrics import run_metrics
+    from ledsim.constants import LinkConstants
+    from ledsim.loop.run_metrics import run_metrics
 
     c = LinkConstants()
     n = 400  # 4 s

@@ -6,7 +6,7 @@ import pytest
 from conftest import assert_user_error, run_cli
 
 from ledsim.loop import sweep as sweep_mod
-from ledsim.loop.config import RunConfig
+from ledsim.loop.run_config import RunConfig
 from ledsim.loop.sweep import COLUMNS, TIMING_COLUMNS, SweepGrid, run_sweep, split_disturbance
 
 OCCLUSION = "occlusion:start=2.2,duration=0.5"

@@ -8,12 +8,12 @@ import numpy as np
 import pytest
 from conftest import run_cli
 
-from ledsim.config import LinkConstants
+from ledsim.constants import LinkConstants
 from ledsim.errors import LedsimError
 from ledsim.loop.closed_loop import run_batch, run_once
-from ledsim.loop.config import RunConfig, navigation_noise
-from ledsim.loop.metrics import run_metrics
 from ledsim.loop.report import summarize
+from ledsim.loop.run_config import RunConfig, navigation_noise
+from ledsim.loop.run_metrics import run_metrics
 from ledsim.loop.table import recovered
 from ledsim.physics.disturbances import DisturbanceError, parse_disturbance
 
@@ -114,7 +114,7 @@ def test_tables_say_how_many_seeds_recovered():
 def test_cli_no_imu_and_a_scene_without_the_vehicles_sensors(tmp_path):
     import re
 
-    from ledsim.resources import scene_path
+    from ledsim.files.resources import scene_path
 
     xml = re.sub(r"<sensor>.*?</sensor>", "", scene_path().read_text(), flags=re.S)
     scene = tmp_path / "bare.xml"

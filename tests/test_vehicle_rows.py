@@ -9,10 +9,10 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from ledsim.config import NavigationNoise
+from ledsim.agent.autopilot import Vehicle
+from ledsim.constants import NavigationNoise
 from ledsim.physics.disturbances import parse_disturbance
 from ledsim.physics.tick import advance, prepare
-from ledsim.physics.vehicle import Vehicle
 from ledsim.physics.world import LinkWorld
 from observer.hull_loads import HullLoadObserver
 from observer.rotations import libm_square, rotation_exp, rotation_log, skew

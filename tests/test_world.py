@@ -3,7 +3,7 @@ import math
 import numpy as np
 import pytest
 
-from ledsim.config import ConfigError, LinkConstants
+from ledsim.constants import ConfigError, LinkConstants
 from ledsim.physics.disturbances import DisturbanceError, parse_disturbance
 from ledsim.physics.sensor import IrradianceSensor
 from ledsim.physics.simulation import simulate
@@ -18,7 +18,7 @@ def world():
 
 
 def paper_power(c, d, theta, phi):
-    """eq. (pow-d-theta-phi) written out again, independently of ledsim.optics."""
+    """eq. (pow-d-theta-phi) written out again, independently of ledsim.radiometry.optics."""
     r = c.receiver
     m = math.log(0.5) / math.log(math.cos(c.led_half_angle))
     g = (r.a1 * math.exp(-(((phi - r.b1) / r.c1) ** 2))
@@ -147,7 +147,7 @@ def test_transmitter_motion_moves_the_link_and_current_moves_a_drifting_hull(wor
         parse_disturbance("current:speed=0.3,hold=0")])
     assert np.linalg.norm(drift.hull_pos[-1] - drift.hull_pos[0]) > 0.1
     world.reset()
-    from ledsim.physics.vehicle import Vehicle
+    from ledsim.agent.autopilot import Vehicle
 
     keeper = Vehicle(world, world.config.constants.Te, 0, world.config.constants.distance)
     held = simulate(world, IrradianceSensor(world), 2.0, disturbances=[
@@ -281,7 +281,7 @@ def test_eye_only_geoms_change_neither_inertia_nor_light_nor_motion(tmp_path):
 
 def test_per_step_float_optics_match_the_array_formulas(world):
     """The plain-float twins on the loop's hot path compute the same powers."""
-    from ledsim.optics import (
+    from ledsim.radiometry.optics import (
         receiver_response,
         receiver_response_at,
         transmitter_gain,

@@ -70,7 +70,7 @@ def _on_sigint(signum, frame) -> None:
     if _State.console and _State.phase == "done":
         _flush()
         os._exit(_State.code)
-    from ledsim.outputs import INTERRUPTED
+    from ledsim.files.outputs import INTERRUPTED
 
     first = not INTERRUPTED.is_set()
     INTERRUPTED.set()
@@ -86,7 +86,7 @@ def _on_sigint(signum, frame) -> None:
 def _force_exit() -> None:
     import time
 
-    from ledsim.outputs import discard_temporaries
+    from ledsim.files.outputs import discard_temporaries
 
     time.sleep(FORCE_EXIT_AFTER)
     discard_temporaries()  # waits for a rename into place under way, and allows no other
@@ -124,7 +124,7 @@ def _pin_threads(argv: list[str]) -> None:
     chose; only effective before numpy is first imported (``import ledsim.cli`` does not
     import it)."""
     if "train" not in argv[:1] and "numpy" not in sys.modules:
-        from ledsim.montecarlo import pin_blas_threads
+        from ledsim.experiment.montecarlo import pin_blas_threads
 
         pin_blas_threads()
 
@@ -153,7 +153,7 @@ def main(argv: list[str] | None = None) -> int:
         interrupted (Ctrl-C: nothing was written).
     """
     argv = sys.argv[1:] if argv is None else list(argv)
-    from ledsim.outputs import INTERRUPTED
+    from ledsim.files.outputs import INTERRUPTED
 
     INTERRUPTED.clear()
     previous = signal.getsignal(signal.SIGINT)
@@ -203,7 +203,7 @@ def _dispatch(commands, args, user_errors: tuple) -> int:
 
     from ledsim.cli.parser import EXIT_USAGE
     from ledsim.errors import one_line
-    from ledsim.outputs import INTERRUPTED
+    from ledsim.files.outputs import INTERRUPTED
 
     # Results go to stdout; progress bars (tqdm) and diagnostics (logging) to stderr.
     logging.basicConfig(format="ledsim: %(message)s",

@@ -6,14 +6,14 @@ from __future__ import annotations
 import json
 import logging
 
-from ledsim.results import to_jsonable
+from ledsim.files.results import to_jsonable
 
 log = logging.getLogger("ledsim")
 
 
 def budget(args) -> int:
     """Print the link budget (a table, or ``--json``) and write ``--plot``."""
-    from ledsim.outputs import atomic_write_bytes, check_out_file
+    from ledsim.files.outputs import atomic_write_bytes, check_out_file
     from ledsim.radiometry.budget import budget_report, format_budget, plot_budget
 
     plot = check_out_file(args.plot, ".png", "--plot") if args.plot else None

@@ -45,7 +45,7 @@ def _warn_saturated(cfg) -> None:
     estimators, whose model has no clipping, read a clipped pair of powers as an angle
     off the peak (a biased phi)."""
     from ledsim.loop.estimation import saturates
-    from ledsim.optics import peak_power
+    from ledsim.radiometry.optics import peak_power
 
     if saturates(cfg):
         c = cfg.world_config().constants

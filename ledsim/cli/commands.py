@@ -18,7 +18,7 @@ from ledsim.cli.export_cmd import export  # noqa: F401 (the export command)
 from ledsim.cli.groups import resolved_distance
 from ledsim.cli.replay_cmd import replay  # noqa: F401 (the replay command)
 from ledsim.errors import LedsimError
-from ledsim.outputs import check_out_dir, check_out_file, output_folder, save_checkpoint
+from ledsim.files.outputs import check_out_dir, check_out_file, output_folder, save_checkpoint
 
 log = logging.getLogger("ledsim")
 
@@ -28,7 +28,7 @@ def _loop_config(args, **given):
     part's own default for the flags a command does not take), validated."""
     from dataclasses import fields
 
-    from ledsim.loop.config import PARTS, RunConfig
+    from ledsim.loop.run_config import PARTS, RunConfig
 
     values = {**vars(args), "disturbances": tuple(args.disturbance),
               "supervision": not args.no_supervision, **_vehicle(args), **given}
@@ -49,13 +49,13 @@ def _link(args, distance: bool = True) -> dict:
 
 
 def simulate(args) -> int:
-    from ledsim.config import LinkConstants
+    from ledsim.constants import LinkConstants
+    from ledsim.experiment.plotting import plot_series
     from ledsim.physics.disturbances import check_sea, check_timing, parse_disturbance
     from ledsim.physics.scene import WorldConfig
     from ledsim.physics.sensor import IrradianceSensor
     from ledsim.physics.simulation import simulate, torque_profile
     from ledsim.physics.world import LinkWorld
-    from ledsim.plotting import plot_series
 
     if not args.seconds > 0:
         raise LedsimError(f"--seconds {args.seconds!r} is not allowed: must be > 0")
@@ -65,7 +65,7 @@ def simulate(args) -> int:
     disturbances = [parse_disturbance(d) for d in args.disturbance]
     check_timing(disturbances, args.seconds)
     check_sea(disturbances, args.depth, args.transmitter_depth)
-    from ledsim.radiometry.presets import link_constants
+    from ledsim.radiometry.link_presets import link_constants
 
     args.distance = resolved_distance(args)
     constants = link_constants(args.link, args.distance, args.water, args.attenuation,
@@ -122,13 +122,13 @@ def run(args) -> int:
 
 def demo(args) -> int:
     """Align the receiver from 0.3 rad off with each estimator; print one table."""
-    from ledsim.loop.config import COMPARED_ESTIMATORS, RunConfig
+    from ledsim.files.outputs import atomic_write_text
+    from ledsim.files.results import write_json
     from ledsim.loop.estimation import check_checkpoint
     from ledsim.loop.report import run_many, write_run
+    from ledsim.loop.run_config import COMPARED_ESTIMATORS, RunConfig
     from ledsim.loop.table import TABLE_HEADER, format_summary
     from ledsim.loop.video import VideoSpec, check_video
-    from ledsim.outputs import atomic_write_text
-    from ledsim.results import write_json
 
     out = check_out_dir(args.out)
     t0 = time.perf_counter()
@@ -165,7 +165,7 @@ def _demo_video_config(scene: str | None, vehicle: dict, link: dict | None = Non
                        estimator: str = "kkl"):
     """The run of the demo's video: 5 s of the ``estimator``-driven alignment with an
     occlusion (on ``link``: default the paper's bench, whose 8.5 cm the cameras frame)."""
-    from ledsim.loop.config import RunConfig
+    from ledsim.loop.run_config import RunConfig
 
     return RunConfig(scenario="align", estimator=estimator, seconds=5.0, scene=scene,
                      disturbances=("occlusion:start=3,duration=0.5",), **vehicle,
@@ -233,15 +233,15 @@ def train(args) -> int:
         raise LedsimError(f"--out {str(args.out)!r}: {str(out.with_suffix('.safetensors'))!r} "
                           "is a folder")
     if args.world == "mujoco":
-        from ledsim.loop.training import train_mujoco_observer
+        from ledsim.loop.world_training import train_mujoco_observer
 
         obs, report, extra = train_mujoco_observer(args.distance, args.noise_scale,
                                                    args.design, args.samples, args.seed,
                                                    args.threads, progress=not args.quiet)
     else:
-        from ledsim.config import LinkConstants
+        from ledsim.constants import LinkConstants
+        from ledsim.experiment.observer_presets import train_preset
         from ledsim.paper.model import LEDLinkModel
-        from ledsim.presets import train_preset
 
         system = LEDLinkModel(LinkConstants(distance=args.distance))
         obs, report = train_preset(system, args.design or "default", args.samples,
@@ -255,9 +255,9 @@ def train(args) -> int:
 
 
 def sweep(args) -> int:
-    from ledsim.loop.config import RunConfig
+    from ledsim.loop.run_config import RunConfig
     from ledsim.loop.sweep import SweepGrid, run_sweep
-    from ledsim.radiometry.presets import default_distance
+    from ledsim.radiometry.link_presets import default_distance
 
     if args.address is not None and args.backend != "ray":
         raise LedsimError("--address needs --backend ray")

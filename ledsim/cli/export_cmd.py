@@ -5,9 +5,9 @@ from __future__ import annotations
 import logging
 from pathlib import Path
 
-from ledsim.config import PAPER_DISTANCE
+from ledsim.constants import PAPER_DISTANCE
 from ledsim.errors import LedsimError
-from ledsim.outputs import check_out_file
+from ledsim.files.outputs import check_out_file
 
 log = logging.getLogger("ledsim")
 
@@ -15,10 +15,10 @@ log = logging.getLogger("ledsim")
 def export(args) -> int:
     """One step of a KKL checkpoint (update with its missing-sample hold, predict with
     Omega, and the decoder) as an ONNX graph."""
-    from ledsim.estimators import build_estimator
-    from ledsim.outputs import atomic_write_bytes
+    from ledsim.experiment.estimators import build_estimator
+    from ledsim.files.outputs import atomic_write_bytes
+    from ledsim.files.resources import require_shipped_checkpoint
     from ledsim.radiometry.link import constants_from_dict
-    from ledsim.resources import require_shipped_checkpoint
     from observer import checkpoint
     from observer.export import kkl_step_graph
 
@@ -32,8 +32,8 @@ def export(args) -> int:
         system = model = LEDLinkModel(constants)
     elif saved.get("class") == "GimbalSystem":
         from ledsim.loop.estimation import identified_model
+        from ledsim.physics.gimbal_system import GimbalSystem
         from ledsim.physics.scene import WorldConfig
-        from ledsim.physics.system import GimbalSystem
 
         world = saved.get("world", {})
         system = GimbalSystem(WorldConfig(constants=constants, **{

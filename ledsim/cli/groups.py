@@ -30,7 +30,7 @@ def add_world_args(p, distance_help="link distance d [m] (default: 0.085 for --l
 def add_link_args(p, sea: bool = True) -> None:
     """The physical link: its preset, the water and the data's bit rate (and, with
     ``sea``, the vehicles' depths)."""
-    from ledsim.radiometry.presets import DEFAULT_LINK, LINK_PRESETS
+    from ledsim.radiometry.link_presets import DEFAULT_LINK, LINK_PRESETS
     from ledsim.radiometry.water import WATER_TYPES
 
     p.add_argument("--link", default=DEFAULT_LINK, **choices(LINK_PRESETS),
@@ -58,7 +58,7 @@ def add_link_args(p, sea: bool = True) -> None:
 
 def resolved_distance(args) -> float:
     """``--distance``, or the ``--link`` preset's default distance [m]."""
-    from ledsim.radiometry.presets import DEFAULT_LINK, default_distance
+    from ledsim.radiometry.link_presets import DEFAULT_LINK, default_distance
 
     d = getattr(args, "distance", None)
     return default_distance(getattr(args, "link", DEFAULT_LINK)) if d is None else d
@@ -68,7 +68,7 @@ def add_scene_args(p) -> None:
     from ledsim.physics.scene import INTEGRATORS
 
     p.add_argument("--scene", help="MJCF scene file (default: the shipped led_link.xml)")
-    from ledsim.loop.config import WorldPart
+    from ledsim.loop.run_config import WorldPart
 
     p.add_argument("--integrator", default=WorldPart.integrator, **choices(INTEGRATORS),
                    help="MuJoCo integrator (docs/physics.md compares them)")
@@ -76,7 +76,7 @@ def add_scene_args(p) -> None:
 
 def add_run_knobs(p) -> None:
     """Knobs every run of ``run`` and ``sweep`` shares: length, particles, torque limit."""
-    from ledsim.loop.config import EstimatorPart, WorldPart
+    from ledsim.loop.run_config import EstimatorPart, WorldPart
 
     p.add_argument("--torque-limit", type=TORQUE_LIMIT, default=WorldPart.torque_limit,
                    help="[N m]")
@@ -88,7 +88,7 @@ def add_run_knobs(p) -> None:
 
 def add_start_arg(p) -> None:
     """The run's start and acquisition (run, render, sweep)."""
-    from ledsim.loop.config import ACQUISITIONS, MAX_INITIAL_ANGLE, TaskPart
+    from ledsim.loop.run_config import ACQUISITIONS, MAX_INITIAL_ANGLE, TaskPart
 
     p.add_argument("--acquisition", default=TaskPart.acquisition, **choices(ACQUISITIONS),
                    help="minimum-time (the default): fix the beam from the pair of "
@@ -111,18 +111,18 @@ def add_vehicle_args(p) -> None:
     p.add_argument("--no-station-keeping", action="store_true",
                    help="the vehicle's thrusters stay idle: the hull drifts with the water")
     p.add_argument("--imu-noise", action="append", default=[], metavar="KEY=VALUE",
-                   help="a noise figure of the vehicle's sensors (ledsim.config."
+                   help="a noise figure of the vehicle's sensors (ledsim.constants."
                    "NavigationNoise: gyro_noise_density, dvl_noise, fix_noise, ...; "
                    "repeatable or comma-joined)")
     p.add_argument("--station-keeping-gain", action="append", default=[],
                    metavar="KEY=VALUE",
-                   help="a gain of the station keeping (ledsim.physics.vehicle."
+                   help="a gain of the station keeping (ledsim.agent.autopilot."
                    "StationKeeping: kp, kd, kp_pitch, kd_pitch, kp_yaw, kd_yaw, "
                    "observer_time; repeatable or comma-joined)")
 
 
 def add_loop_args(p) -> None:
-    from ledsim.loop.config import LOOP_ESTIMATORS, PHYSICS_SCENARIOS, EstimatorPart, TaskPart
+    from ledsim.loop.run_config import LOOP_ESTIMATORS, PHYSICS_SCENARIOS, EstimatorPart, TaskPart
     from ledsim.physics.disturbances import DISTURBANCES
 
     p.add_argument("--scenario", default=TaskPart.scenario, **choices(PHYSICS_SCENARIOS),

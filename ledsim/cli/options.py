@@ -5,7 +5,7 @@ from __future__ import annotations
 import argparse
 import math
 
-from ledsim.config import MIN_BIT_RATE, MIN_DISTANCE, MIN_NOISE_SCALE
+from ledsim.constants import MIN_BIT_RATE, MIN_DISTANCE, MIN_NOISE_SCALE
 
 
 def number(lo: float, hi: float, unit: str = "", *, integer: bool = False,

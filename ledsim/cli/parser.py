@@ -27,7 +27,7 @@ from ledsim.cli.options import (
     WORKERS,
     number,
 )
-from ledsim.config import PAPER_DISTANCE
+from ledsim.constants import PAPER_DISTANCE
 
 EXIT_USAGE = 2
 CAMERAS = ("side", "overview", "chase")  # the shipped scene's cameras
@@ -62,17 +62,17 @@ class _Help(argparse.ArgumentDefaultsHelpFormatter):
 
 def build_parser() -> argparse.ArgumentParser:
     from ledsim import __version__
+    from ledsim.experiment.observer_presets import PRESETS
     from ledsim.paper.evaluate import CLOSED_FORM_ESTIMATORS
     from ledsim.paper.scenarios import PAPER_SCENARIOS
     from ledsim.physics.simulation import TORQUE_PROFILES
-    from ledsim.presets import PRESETS
 
     p = _Parser(prog="ledsim", description="An underwater LED optical link in MuJoCo, kept "
                 "aligned by a learned KKL observer. User mistakes exit with code 2.")
-    from ledsim.loop.config import EstimatorPart as E
-    from ledsim.loop.config import ExecutionPart as X
-    from ledsim.loop.config import TaskPart as T
-    from ledsim.loop.config import WorldPart as W
+    from ledsim.loop.run_config import EstimatorPart as E
+    from ledsim.loop.run_config import ExecutionPart as X
+    from ledsim.loop.run_config import TaskPart as T
+    from ledsim.loop.run_config import WorldPart as W
 
     p.add_argument("--version", action="version", version=f"ledsim {__version__}")
     sub = p.add_subparsers(dest="command", required=True, parser_class=_Parser)
@@ -226,7 +226,7 @@ def build_parser() -> argparse.ArgumentParser:
 
     sw = command("sweep", "a grid of closed-loop runs (estimators x disturbances x "
                  "distances x noise scales x seeds), locally or on a Ray cluster")
-    from ledsim.loop.config import LOOP_ESTIMATORS, PHYSICS_SCENARIOS
+    from ledsim.loop.run_config import LOOP_ESTIMATORS, PHYSICS_SCENARIOS
     from ledsim.loop.sweep import BACKENDS
     sw.add_argument("--estimator", action="append", choices=list(LOOP_ESTIMATORS),
                     metavar="{" + ",".join(LOOP_ESTIMATORS) + "}",

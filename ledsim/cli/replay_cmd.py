@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import json
 
-from ledsim.results import to_jsonable
+from ledsim.files.results import to_jsonable
 
 
 def replay(args) -> int:

@@ -59,16 +59,16 @@ import numpy as np
 from gymnasium import spaces
 from gymnasium.utils import EzPickle
 
-from ledsim.config import MIN_DISTANCE, LinkConstants
-from ledsim.control import receiver_peak
+from ledsim.agent.laws import receiver_peak
+from ledsim.constants import MIN_DISTANCE, LinkConstants
 from ledsim.loop.closed_loop import start_world
-from ledsim.loop.config import MAX_INITIAL_ANGLE, EstimatorPart, RunConfig, TaskPart, WorldPart
 from ledsim.loop.estimation import run_noise
-from ledsim.optics import IMPOSSIBLE_SIGMAS, achievable_power, peak_power
+from ledsim.loop.run_config import MAX_INITIAL_ANGLE, EstimatorPart, RunConfig, TaskPart, WorldPart
+from ledsim.physics.gimbal_system import GimbalSystem
 from ledsim.physics.sensor import SensorReading
-from ledsim.physics.system import GimbalSystem
 from ledsim.physics.tick import prepare
-from ledsim.radiometry.presets import link_constants
+from ledsim.radiometry.link_presets import link_constants
+from ledsim.radiometry.optics import IMPOSSIBLE_SIGMAS, achievable_power, peak_power
 
 #: Bounds of the vehicle's readings in the observation (indices 2-6): gyro z [rad/s],
 #: DVL x, y [m/s], encoder [rad], LOS rate [rad/s].

@@ -9,10 +9,10 @@ import gymnasium as gym
 import numpy as np
 from gymnasium import spaces
 
+from ledsim.agent.step import GimbalMotor
 from ledsim.envs.link_align import LinkAlignEnv
 from ledsim.loop.closed_loop import control_step, dropout_gate, run_supervisor
 from ledsim.loop.estimation import identified_model_of
-from ledsim.step import GimbalMotor
 
 
 def torque_action(torque: float, limit: float) -> float:
@@ -35,7 +35,7 @@ class ShippedAlignmentPolicy:
     """``ledsim run``'s stack as a policy on :class:`LinkAlignEnv`: the dropout gate, the
     estimator under link supervision (the gain-scheduled KKL, acquisition scans), the scenario's
     control law and the warm-up hold, through the same
-    :class:`~ledsim.step.ControlStep`. ``action = policy(observation)``; it starts
+    :class:`~ledsim.agent.step.ControlStep`. ``action = policy(observation)``; it starts
     afresh with each episode of the environment.
 
     Args:

@@ -27,10 +27,10 @@ import numpy as np
 from gymnasium.vector import AutoresetMode, VectorEnv
 from gymnasium.vector.utils import batch_space
 
+from ledsim.agent.autopilot import Vehicle
 from ledsim.envs.link_align import LinkAlignEnv
 from ledsim.physics.sensor_rows import SensorRows
 from ledsim.physics.tick import PhysicsPass, step_worlds
-from ledsim.physics.vehicle import Vehicle
 
 #: The autoreset modes by name (the enum's values are spelt too: ``"NextStep"``).
 AUTORESET_MODES = {"next-step": AutoresetMode.NEXT_STEP,

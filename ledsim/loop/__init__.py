@@ -1,8 +1,8 @@
 """The closed loop in MuJoCo: configuration, one run, Monte-Carlo summary and report."""
 
 from ledsim.loop.closed_loop import ClosedLoop, RunOutcome, Trace, run_once
-from ledsim.loop.config import PHYSICS_SCENARIOS, RunConfig
 from ledsim.loop.report import RunSummary, run_many, write_run
+from ledsim.loop.run_config import PHYSICS_SCENARIOS, RunConfig
 
 __all__ = ["ClosedLoop", "RunOutcome", "Trace", "run_once", "PHYSICS_SCENARIOS", "RunConfig",
            "RunSummary", "run_many", "write_run"]

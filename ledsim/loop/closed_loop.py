@@ -2,7 +2,7 @@
 
 MuJoCo supplies the true angle, the ray sensors the two powers (every seed's read in
 one pass: :class:`~ledsim.physics.sensor_rows.SensorRows`), and each seed's
-:class:`~ledsim.step.ControlStep` (dropout gate, supervisor with its estimator, control
+:class:`~ledsim.agent.step.ControlStep` (dropout gate, supervisor with its estimator, control
 law, motor) turns them into a motor torque; :func:`~ledsim.physics.tick.advance` moves
 the world on. :class:`ClosedLoop` steps the runs of several seeds together, their
 physics split over threads (MuJoCo steps without the GIL); a run of one seed is the
@@ -21,8 +21,13 @@ from collections.abc import Callable, Sequence
 import numpy as np
 from tqdm.auto import tqdm
 
-from ledsim.control import intensity_maximum
-from ledsim.loop.config import RunConfig
+from ledsim.agent.autopilot import Vehicle
+from ledsim.agent.gate import DropoutGate
+from ledsim.agent.laws import intensity_maximum
+from ledsim.agent.slew import TimeOptimalSlew
+from ledsim.agent.step import ControlStep, GimbalMotor, Unsupervised
+from ledsim.agent.supervisor import LinkSupervisor
+from ledsim.experiment.montecarlo import report_progress
 from ledsim.loop.estimation import (  # noqa: F401 (re-exported)
     check_checkpoint,
     identified_model,
@@ -30,23 +35,18 @@ from ledsim.loop.estimation import (  # noqa: F401 (re-exported)
     loop_estimator,
     run_noise,
 )
-from ledsim.loop.gate import DropoutGate
 from ledsim.loop.given import GivenRecord
 from ledsim.loop.outcome import Navigation, RunOutcome, RunRecord, Trace, achievable_power, outcome  # noqa: F401
-from ledsim.loop.slew import TimeOptimalSlew
+from ledsim.loop.run_config import RunConfig
 from ledsim.loop.start import Surroundings, start_world  # noqa: F401 (re-exported)
-from ledsim.loop.supervisor import LinkSupervisor
-from ledsim.montecarlo import report_progress
-from ledsim.optics import nominal_noise_std, peak_power
 from ledsim.physics.disturbances import parse_disturbance
+from ledsim.physics.gimbal_system import GimbalSystem
 from ledsim.physics.sensor import SensorReading
 from ledsim.physics.sensor_rows import SensorRows
 from ledsim.physics.simulation import SimulationResult
-from ledsim.physics.system import GimbalSystem
 from ledsim.physics.tick import PhysicsPass, step_worlds
-from ledsim.physics.vehicle import Vehicle
 from ledsim.physics.world import LinkWorld
-from ledsim.step import ControlStep, GimbalMotor, Unsupervised
+from ledsim.radiometry.optics import nominal_noise_std, peak_power
 from observer.noise import MeasurementNoise
 from observer.oracle import Oracle
 from observer.recording import RecordingEstimator

@@ -16,14 +16,14 @@ import json
 from dataclasses import dataclass, replace
 from pathlib import Path
 
-from ledsim.config import PAPER_DISTANCE
-from ledsim.estimators import LOOP_KKL_ESTIMATORS, build_estimator
-from ledsim.loop.config import RunConfig
-from ledsim.optics import peak_power, receiver_saturates
+from ledsim.constants import PAPER_DISTANCE
+from ledsim.experiment.estimators import LOOP_KKL_ESTIMATORS, build_estimator
+from ledsim.files.resources import require_shipped_checkpoint
+from ledsim.loop.run_config import RunConfig
+from ledsim.physics.gimbal_system import GimbalSystem, IdentifiedGimbalModel
 from ledsim.physics.scene import WorldConfig
-from ledsim.physics.system import GimbalSystem, IdentifiedGimbalModel
-from ledsim.radiometry.presets import kkl_reference_constants, preset_named
-from ledsim.resources import require_shipped_checkpoint
+from ledsim.radiometry.link_presets import kkl_reference_constants, preset_named
+from ledsim.radiometry.optics import peak_power, receiver_saturates
 from observer import checkpoint as ckpt
 from observer.bank import ObserverBank
 from observer.noise import MeasurementNoise
@@ -56,7 +56,7 @@ def served(cfg: RunConfig) -> bool:
 
 def saturates(cfg: RunConfig) -> bool:
     """Whether the run's receiver saturates at its distance
-    (:func:`~ledsim.optics.receiver_saturates`)."""
+    (:func:`~ledsim.radiometry.optics.receiver_saturates`)."""
     return receiver_saturates(cfg.world_config().constants, cfg.noise_scale)
 
 
@@ -70,7 +70,7 @@ DRIVEN_GAIN = 2.0
 def reference_world(cfg: RunConfig) -> WorldConfig:
     """The world the run's shipped KKL was trained in: the bench at
     :data:`REFERENCE_DISTANCE`, or on a physical link the bench with the physical
-    receiver (:func:`~ledsim.radiometry.presets.kkl_reference_constants`)."""
+    receiver (:func:`~ledsim.radiometry.link_presets.kkl_reference_constants`)."""
     # The bench's own water: the tracker takes another water's attenuation as a gain;
     # and the bench's level LED (the models know only the turning plane).
     ref = replace(cfg, water=None, attenuation=None, transmitter_depth=None).world_config(

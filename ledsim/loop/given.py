@@ -27,7 +27,7 @@ class GivenRecord:
         self.gain = np.ones(steps)
 
     def take(self, k: int, step, los) -> None:
-        """Step ``k`` of the :class:`~ledsim.step.ControlStep` ``step`` (``los``: the
+        """Step ``k`` of the :class:`~ledsim.agent.step.ControlStep` ``step`` (``los``: the
         vehicle's line of sight, None without the IMU)."""
         self.u_hull[k] = 0.0 if los is None else los.acceleration
         self.reseeded[k] = step.decision.reseeded

@@ -1,7 +1,7 @@
 """What each step of a run was, for judging its estimate and its losses: the silent
 errors (a wrong estimate not flagged), the losses declared, the false ones (declared
 while the data still explained the estimate) and the re-seeds. The whole run's metrics
-(:mod:`ledsim.loop.metrics`) and each window's (:mod:`ledsim.loop.windows`) count them
+(:mod:`ledsim.loop.run_metrics`) and each window's (:mod:`ledsim.loop.windows`) count them
 from one :class:`StepFlags`."""
 
 from __future__ import annotations

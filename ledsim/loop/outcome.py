@@ -7,16 +7,16 @@ from typing import NamedTuple
 
 import numpy as np
 
-from ledsim import optics
-from ledsim.config import LinkConstants
-from ledsim.control import receiver_peak
-from ledsim.layout import ReceiverLayout
-from ledsim.linkbudget import BIT_RATE
-from ledsim.loop.bound import run_terms
-from ledsim.loop.config import RunConfig
-from ledsim.loop.metrics import RunMetrics, availability_mask, run_metrics, step_flags
+from ledsim.agent.laws import receiver_peak
+from ledsim.constants import LinkConstants
+from ledsim.files.results import DictAccess
+from ledsim.loop.pcrb_runs import run_terms
+from ledsim.loop.run_config import RunConfig
+from ledsim.loop.run_metrics import RunMetrics, availability_mask, run_metrics, step_flags
 from ledsim.loop.windows import WindowMetrics, horizontal_rms, window_metrics
-from ledsim.results import DictAccess
+from ledsim.physics.layout import ReceiverLayout
+from ledsim.radiometry import optics
+from ledsim.radiometry.data_channel import BIT_RATE
 from observer.pcrb import BoundError
 
 
@@ -76,7 +76,7 @@ class RunOutcome(DictAccess):
     factor [-], the trace when asked for, the metrics of each window when asked for
     (:class:`~ledsim.loop.windows.WindowMetrics`), and whether the vehicle kept station
     (False: it drifted, or the scene has no vehicle), and the terms of its posterior
-    Cramér-Rao bound (:func:`ledsim.loop.bound.run_terms`; None: the model has no process
+    Cramér-Rao bound (:func:`ledsim.loop.pcrb_runs.run_terms`; None: the model has no process
     noise)."""
 
     metrics: RunMetrics

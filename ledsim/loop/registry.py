@@ -14,12 +14,14 @@ from __future__ import annotations
 
 import functools
 
-from ledsim.config import LinkConstants
-from ledsim.control import AlignmentPID, Excitation, PaperRateDamping
-from ledsim.estimators import COMPARED_ESTIMATORS as COMPARED_ESTIMATORS  # alias, see below
-from ledsim.estimators import LOOP_ESTIMATORS as LOOP_ESTIMATORS
-from ledsim.optics import nominal_noise_std, peak_power
-from ledsim.scenario import Scenario
+from ledsim.agent.laws import AlignmentPID, Excitation, PaperRateDamping
+from ledsim.constants import LinkConstants
+from ledsim.experiment.estimators import (
+    COMPARED_ESTIMATORS as COMPARED_ESTIMATORS,  # alias, see below
+)
+from ledsim.experiment.estimators import LOOP_ESTIMATORS as LOOP_ESTIMATORS
+from ledsim.experiment.scenario import Scenario
+from ledsim.radiometry.optics import nominal_noise_std, peak_power
 
 PHYSICS_SCENARIOS = {
     s.name: s for s in (
@@ -36,7 +38,7 @@ PHYSICS_SCENARIOS = {
     )
 }
 # LOOP_ESTIMATORS and COMPARED_ESTIMATORS are the estimator registry's
-# (ledsim.estimators), imported here where they were first defined.
+# (ledsim.experiment.estimators), imported here where they were first defined.
 OMEGA_MODELS = ("identified", "simulator", "none")
 FILTER_DISTANCES = ("configured", "nominal")
 ACQUISITIONS = ("warm-up", "minimum-time")

@@ -21,8 +21,8 @@ from pathlib import Path
 import numpy as np
 
 from ledsim.errors import LedsimError
-from ledsim.loop.config import RunConfig
-from ledsim.results import DictAccess
+from ledsim.files.results import DictAccess
+from ledsim.loop.run_config import RunConfig
 from observer.errors import ObserverError
 from observer.kkl import KKLObserver
 from observer.recording import CALLS, difference, replay_calls
@@ -202,7 +202,7 @@ def trace_config(arrays: dict[str, np.ndarray], path: str | Path | None = None) 
 def run_estimator(cfg: RunConfig):
     """A fresh estimator of the run ``cfg`` (its checkpoint, its identified model)."""
     from ledsim.loop.estimation import identified_model, loop_estimator
-    from ledsim.physics.system import GimbalSystem
+    from ledsim.physics.gimbal_system import GimbalSystem
 
     system = GimbalSystem(cfg.world_config())
     est, _ = loop_estimator(cfg, system, identified_model(system))

@@ -10,13 +10,13 @@ from pathlib import Path
 
 import numpy as np
 
-from ledsim.loop.bound import bound_summary
+from ledsim.experiment.montecarlo import run_jobs
+from ledsim.files.outputs import atomic_write_bytes
+from ledsim.files.results import DictAccess, write_json
 from ledsim.loop.closed_loop import RunOutcome, Trace, check_checkpoint, run_batch
-from ledsim.loop.config import RunConfig
 from ledsim.loop.estimation import saturates, served
-from ledsim.montecarlo import run_jobs
-from ledsim.outputs import atomic_write_bytes
-from ledsim.results import DictAccess, write_json
+from ledsim.loop.pcrb_runs import bound_summary
+from ledsim.loop.run_config import RunConfig
 from observer.metrics import mean_and_spread
 
 
@@ -57,11 +57,11 @@ class RunSummary(DictAccess):
     and the navigation's horizontal error (None without a vehicle); ``windows`` (with
     ``--window``) the metrics of each window over the seeds; ``pointing_loss_db`` the
     mean pointing loss [dB] and ``outside_domain_share`` the share of the run the
-    estimator was outside its training box (:class:`~ledsim.loop.metrics.RunMetrics`);
+    estimator was outside its training box (:class:`~ledsim.loop.run_metrics.RunMetrics`);
     ``pcrb_steady_x1`` [rad] and ``pcrb_steady_x2`` [rad/s] the root of the posterior
     Cramér-Rao bound over the steady window, along the seeds' true trajectories, and
     ``rmse_over_pcrb_x1``/``_x2`` the steady RMSE over it, with one Monte-Carlo standard
-    error in ``rmse_over_pcrb_err_x1``/``_x2`` (:mod:`ledsim.loop.bound`; none for the
+    error in ``rmse_over_pcrb_err_x1``/``_x2`` (:mod:`ledsim.loop.pcrb_runs`; none for the
     oracle, which reads the true state). ``link`` names the link preset (``paper``: the
     paper's bench), ``water`` its water (None: the bench's own), ``attenuation`` the
     power law's b [1/m] (a physical link's effective attenuation), ``received_power_w``
@@ -74,7 +74,7 @@ class RunSummary(DictAccess):
     after the first acquisition, those that the data did not call for (the geometry
     allowed the link, no occluder shaded it, and the estimator's own phi was within 0.1
     rad of the truth), and the estimator's restarts, per seed
-    (:class:`~ledsim.loop.metrics.RunMetrics`)."""
+    (:class:`~ledsim.loop.run_metrics.RunMetrics`)."""
 
     scenario: str
     estimator: str
@@ -271,7 +271,7 @@ def write_run(summary: RunSummary, trace: Trace | None, out: Path,
     out.mkdir(parents=True, exist_ok=True)
     paths = [write_json(out / "results.json", summary)]
     if trace is not None and plot:
-        from ledsim.plotting import plot_run
+        from ledsim.experiment.plotting import plot_run
 
         dist = ", ".join(summary.disturbances) or "no disturbance"
         paths.append(plot_run(trace, f"{summary.scenario} with {summary.estimator} — {dist}",

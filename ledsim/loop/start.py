@@ -5,13 +5,13 @@ from __future__ import annotations
 
 from typing import NamedTuple
 
-from ledsim.loop.config import RunConfig
+from ledsim.agent.autopilot import Vehicle
 from ledsim.loop.estimation import run_noise
+from ledsim.loop.run_config import RunConfig
 from ledsim.physics.disturbances import parse_disturbance
+from ledsim.physics.gimbal_system import GimbalSystem
 from ledsim.physics.sensor import IrradianceSensor
-from ledsim.physics.system import GimbalSystem
 from ledsim.physics.tick import prepare
-from ledsim.physics.vehicle import Vehicle
 from ledsim.physics.world import LinkWorld
 from observer.noise import MeasurementNoise
 

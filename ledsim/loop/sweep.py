@@ -27,11 +27,11 @@ from dataclasses import asdict, dataclass, replace
 from pathlib import Path
 
 from ledsim.errors import LedsimError
-from ledsim.loop.config import RunConfig
+from ledsim.files.outputs import atomic_write_text
+from ledsim.files.results import to_jsonable
 from ledsim.loop.report import Stat
-from ledsim.outputs import atomic_write_text
+from ledsim.loop.run_config import RunConfig
 from ledsim.physics.scene import DEFAULT_DEPTH
-from ledsim.results import to_jsonable
 
 log = logging.getLogger("ledsim")
 
@@ -42,7 +42,7 @@ NO_DISTURBANCE = "none"
 CELL_COLUMNS = ("scenario", "estimator", "disturbance", "distance", "noise_scale", "seed",
                 "seconds", "supervision", "imu", "station_keeping", "link", "water",
                 "bit_rate", "depth")
-#: Columns that measure the run (units as in :class:`~ledsim.loop.metrics.RunMetrics`).
+#: Columns that measure the run (units as in :class:`~ledsim.loop.run_metrics.RunMetrics`).
 METRIC_COLUMNS = ("rmse_x1", "rmse_x2", "rmse_steady_x1", "rmse_steady_x2",
                   "alignment_time", "availability", "mean_power", "recovery_time",
                   "lost_share", "detection_delay", "losses", "snr_db", "ber",
@@ -96,7 +96,7 @@ class SweepGrid:
     """The grid of a sweep and the settings every cell shares.
 
     Attributes:
-        estimators: keys of :data:`~ledsim.loop.config.LOOP_ESTIMATORS`.
+        estimators: keys of :data:`~ledsim.loop.run_config.LOOP_ESTIMATORS`.
         disturbances: cells of disturbance specs (:func:`split_disturbance`).
         distances: link distances d [m].
         noise_scales: multipliers of the measurement-noise std [-].
@@ -207,7 +207,7 @@ class SweepStore:
         summary = summarize_rows(rows)
         atomic_write_text(paths[1], _csv(summary, tuple(summary[0])))
         if plot:
-            from ledsim.plotting import plot_sweep
+            from ledsim.experiment.plotting import plot_sweep
 
             paths.append(plot_sweep(summary, self.out / "summary.png"))
         return paths
@@ -276,7 +276,7 @@ def run_sweep(grid: SweepGrid, out: str | Path, backend: str = "local",
         store.save(job[1], result)
         done[job[1]] = result["row"]
 
-    from ledsim.montecarlo import run_jobs, run_jobs_ray
+    from ledsim.experiment.montecarlo import run_jobs, run_jobs_ray
 
     if backend == "local":
         run_jobs(run_cell, jobs, workers, "sweep", progress, on_result=keep)

@@ -8,7 +8,8 @@ import math
 import types
 import typing
 
-from ledsim.config import (
+from ledsim.agent.autopilot import StationKeeping
+from ledsim.constants import (
     MIN_BIT_RATE,
     MIN_DISTANCE,
     MIN_NOISE_SCALE,
@@ -17,7 +18,7 @@ from ledsim.config import (
     NavigationNoise,
 )
 from ledsim.errors import LedsimError, check_ranges
-from ledsim.estimators import LOOP_KKL_ESTIMATORS
+from ledsim.experiment.estimators import LOOP_KKL_ESTIMATORS
 from ledsim.keyvalues import settings_of
 from ledsim.loop.registry import (
     ACQUISITIONS,
@@ -31,20 +32,19 @@ from ledsim.loop.registry import (
 )
 from ledsim.physics.disturbances import check_sea, check_timing, parse_disturbance
 from ledsim.physics.scene import WorldConfig, WorldError, transmitter_rise
-from ledsim.physics.vehicle import StationKeeping
-from ledsim.radiometry.presets import LINK_PRESETS
+from ledsim.radiometry.link_presets import LINK_PRESETS
 from ledsim.radiometry.water import WATER_TYPES
 
 
 def navigation_noise(settings: tuple[str, ...]) -> NavigationNoise:
-    """:class:`~ledsim.config.NavigationNoise` with ``key=value`` ``settings`` applied;
+    """:class:`~ledsim.constants.NavigationNoise` with ``key=value`` ``settings`` applied;
     a bad key or value raises :class:`LedsimError` naming it."""
     return settings_of(NavigationNoise, settings, "--imu-noise", LedsimError,
                        integers=("encoder_bits",))
 
 
 def keeping_gains(settings: tuple[str, ...]) -> StationKeeping:
-    """:class:`~ledsim.physics.vehicle.StationKeeping` with ``key=value`` ``settings``
+    """:class:`~ledsim.agent.autopilot.StationKeeping` with ``key=value`` ``settings``
     applied; a bad key or value raises :class:`LedsimError` naming it."""
     return settings_of(StationKeeping, settings, "--station-keeping-gain", LedsimError)
 
@@ -55,7 +55,7 @@ KKL_ON_BENCH = LOOP_KKL_ESTIMATORS
 
 def validate_run(cfg) -> None:
     """Raise :class:`LedsimError` naming the first thing ``cfg`` (a
-    :class:`~ledsim.loop.config.RunConfig`) does not allow."""
+    :class:`~ledsim.loop.run_config.RunConfig`) does not allow."""
     for flag, value, registry in (("scenario", cfg.scenario, PHYSICS_SCENARIOS),
                                   ("estimator", cfg.estimator, LOOP_ESTIMATORS),
                                   ("--omega-model", cfg.omega_model, OMEGA_MODELS),
@@ -175,7 +175,7 @@ def check_world(config: WorldConfig) -> None:
 
 
 def run_from_dict(cls, saved: dict):
-    """The run of class ``cls`` (:class:`~ledsim.loop.config.RunConfig`) that a saved
+    """The run of class ``cls`` (:class:`~ledsim.loop.run_config.RunConfig`) that a saved
     configuration describes (``asdict`` of one, through JSON, so its tuples are lists; a
     key it lacks keeps its default), checked: a key that is not a field, a value of
     another type, or a run :func:`validate_run` refuses raises :class:`LedsimError`

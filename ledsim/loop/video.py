@@ -7,7 +7,7 @@ from dataclasses import dataclass
 from pathlib import Path
 
 from ledsim.loop.closed_loop import ClosedLoop
-from ledsim.loop.config import RunConfig
+from ledsim.loop.run_config import RunConfig
 from ledsim.physics.render import FrameRecorder, VideoWriter
 from ledsim.physics.world import LinkWorld
 
@@ -64,7 +64,7 @@ def render_video(cfg: RunConfig, seed: int, out: Path, spec: VideoSpec,
         if still is not None and recorder and recorder[0].last_frame is not None:
             from PIL import Image
 
-            from ledsim.outputs import atomic_write_bytes
+            from ledsim.files.outputs import atomic_write_bytes
 
             frame = recorder[0].last_frame
             atomic_write_bytes(Path(still), lambda tmp: Image.fromarray(frame).save(

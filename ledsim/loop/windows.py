@@ -14,10 +14,10 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from ledsim.linkbudget import BIT_RATE, link_budget_of
+from ledsim.files.results import DictAccess
 from ledsim.loop.losses import StepFlags
-from ledsim.loop.metrics import availability_mask
-from ledsim.results import DictAccess
+from ledsim.loop.run_metrics import availability_mask
+from ledsim.radiometry.data_channel import BIT_RATE, link_budget_of
 from observer.noise import MeasurementNoise
 
 
@@ -28,7 +28,7 @@ class WindowMetrics(DictAccess):
     Attributes:
         start, end: the window [s].
         availability: share of its steps with the link available (as
-            :class:`~ledsim.loop.metrics.RunMetrics`) [-].
+            :class:`~ledsim.loop.run_metrics.RunMetrics`) [-].
         fec_share: share of its steps under the FEC limit [-].
         mean_power: mean noise-free P1 [W].
         hull_error_rms: the hull's horizontal distance from its station, RMS [m]
@@ -39,7 +39,7 @@ class WindowMetrics(DictAccess):
             silent_error_share: shares of its steps flagged lost, and wrong but not
             flagged after the warm-up [-]; loss_events, false_loss_events, reseeds: the
             losses declared in it, the false ones, and the estimator's restarts [-] (as
-            :class:`~ledsim.loop.metrics.RunMetrics`; None: not measured).
+            :class:`~ledsim.loop.run_metrics.RunMetrics`; None: not measured).
     """
 
     start: float
@@ -76,7 +76,7 @@ def window_metrics(p1: np.ndarray, power_max: np.ndarray, noise_std: float, Te: 
     Te [s]; with a vehicle, the true hull position ``hull`` (N, 3) [m], its ``station``
     (3,) [m] and the ``navigated`` position (N, 3) [m]. ``noise``: the run's noise
     object (its link budget; None: ``noise_std``'s) at ``bit_rate`` [bit/s]; ``steps``:
-    what each step was (:func:`~ledsim.loop.metrics.step_flags`; None: the estimate's
+    what each step was (:func:`~ledsim.loop.run_metrics.step_flags`; None: the estimate's
     metrics are not given)."""
     if not window > 0:
         raise ValueError(f"window={window!r} is not allowed: must be > 0 s")

@@ -11,23 +11,23 @@ from pathlib import Path
 
 import numpy as np
 
-from ledsim.config import MIN_DISTANCE, LinkConstants
+from ledsim.constants import MIN_DISTANCE, LinkConstants
 from ledsim.errors import LedsimError, check_ranges
-from ledsim.estimators import CLOSED_FORM_ESTIMATORS as CLOSED_FORM_ESTIMATORS  # alias
-from ledsim.estimators import build_estimator
-from ledsim.montecarlo import run_jobs
-from ledsim.outputs import atomic_write_text
-from ledsim.paper.bound import bound_stats, bound_terms, pointing_loss
+from ledsim.experiment.estimators import CLOSED_FORM_ESTIMATORS as CLOSED_FORM_ESTIMATORS  # alias
+from ledsim.experiment.estimators import build_estimator
+from ledsim.experiment.montecarlo import run_jobs
+from ledsim.files.outputs import atomic_write_text
+from ledsim.files.resources import require_shipped_checkpoint, shipped_checkpoint
+from ledsim.files.results import DictAccess, write_json
 from ledsim.paper.model import LEDLinkModel
+from ledsim.paper.pcrb_tables import bound_stats, bound_terms, pointing_loss
 from ledsim.paper.scenarios import PAPER_TABLE1, PAPER_TABLE2, Noise, Trajectory, get_scenario, run
-from ledsim.resources import require_shipped_checkpoint, shipped_checkpoint
-from ledsim.results import DictAccess, write_json
 from observer.metrics import converged, mean_and_spread, rmse
 
 CONVERGENCE_TOLERANCE = 0.02  # rad: steady-state x1 RMSE below this counts as converged
 KEYS = ("x1", "x2", "y1", "y2")
 # CLOSED_FORM_ESTIMATORS (what ``ledsim evaluate --estimator`` may run) is the
-# registry's (ledsim.estimators), an alias here where it was first defined.
+# registry's (ledsim.experiment.estimators), an alias here where it was first defined.
 #: Random initial guesses of the convergence share are drawn from this seed.
 STARTS_SEED = 12345
 
@@ -251,7 +251,7 @@ def markdown_table(result: EvaluationResult) -> str:
 
 def write_outputs(result: EvaluationResult, out_dir: Path) -> list[Path]:
     """results.json, table.md and the figures; each written atomically."""
-    from ledsim.plotting import plot_estimates, plot_powers
+    from ledsim.experiment.plotting import plot_estimates, plot_powers
 
     out_dir = Path(out_dir)
     out_dir.mkdir(parents=True, exist_ok=True)

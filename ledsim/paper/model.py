@@ -13,8 +13,8 @@ from __future__ import annotations
 
 import numpy as np
 
-from ledsim.config import LinkConstants
-from ledsim.optics import (
+from ledsim.constants import LinkConstants
+from ledsim.radiometry.optics import (
     layout_power,
     layout_power_jacobian,
     plausible_power_range,

@@ -24,11 +24,11 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from ledsim.control import Excitation, PaperRateDamping
+from ledsim.agent.laws import Excitation, PaperRateDamping
+from ledsim.agent.step import ControlStep, DirectInput, Unsupervised, identity_gate
 from ledsim.errors import LedsimError
-from ledsim.results import DictAccess
-from ledsim.scenario import Scenario
-from ledsim.step import ControlStep, DirectInput, Unsupervised, identity_gate
+from ledsim.experiment.scenario import Scenario
+from ledsim.files.results import DictAccess
 from observer.estimator import Estimator
 from observer.system import DiscreteSystem
 

@@ -15,9 +15,9 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from ledsim.optics import received_power, receiver_response, transmitter_gain
 from ledsim.physics.batch import WorldBatch, WorldPoses, cross3, dot3
 from ledsim.physics.sensor import IrradianceSensor, SensorReading
+from ledsim.radiometry.optics import received_power, receiver_response, transmitter_gain
 
 
 @dataclass

@@ -29,8 +29,8 @@ import numpy as np
 
 from ledsim.keyvalues import parse_key_values
 from ledsim.physics.disturbance_base import Disturbance, DisturbanceError  # noqa: F401 (re-exported)
+from ledsim.physics.flow import WaterCurrent, Waves
 from ledsim.physics.light import Scintillation, SunlightFlicker
-from ledsim.physics.water import WaterCurrent, Waves
 from ledsim.physics.world import LinkWorld
 
 

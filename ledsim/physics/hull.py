@@ -32,7 +32,7 @@ class HullAccess:
 
     def vehicle_motion(self) -> VehicleMotion | None:
         """The vehicle's own sensors, noise-free, at the current state (None: the scene
-        has none); :class:`~ledsim.physics.navigation.NavigationSensor` adds the noise."""
+        has none); :class:`~ledsim.physics.nav_sensors.NavigationSensor` adds the noise."""
         adr = self.ids.vehicle_sensors
         if adr is None:
             return None

@@ -27,7 +27,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from ledsim.config import GRAVITY
+from ledsim.constants import GRAVITY
 
 
 def wavenumber(period: float, water_depth: float = math.inf) -> float:

@@ -26,12 +26,12 @@ import mujoco
 import numpy as np
 
 from ledsim.errors import LedsimError
-from ledsim.optics import peak_power
-from ledsim.outputs import INTERRUPTED, umask
+from ledsim.files.outputs import INTERRUPTED, umask
 from ledsim.physics.overlay import STATUS_BADGES, Overlay  # noqa: F401 (re-exported)
 from ledsim.physics.sea_render import add_beam_cone, add_surface
 from ledsim.physics.sensor import SensorReading
 from ledsim.physics.world import LinkWorld
+from ledsim.radiometry.optics import peak_power
 
 BEAM_WIDTH = 0.0012  # m, radius of the drawn beam capsules
 CLEAR = np.array([0.35, 1.0, 0.95])

@@ -15,8 +15,9 @@ from pathlib import Path
 import mujoco
 import numpy as np
 
-from ledsim.config import MIN_DISTANCE, ConfigError, LinkConstants
+from ledsim.constants import MIN_DISTANCE, ConfigError, LinkConstants
 from ledsim.errors import LedsimError, check_ranges
+from ledsim.files.resources import scene_path
 from ledsim.physics.scene_ids import (  # noqa: F401 (re-exported)
     MAGNETOMETER,
     THRUSTERS,
@@ -25,7 +26,6 @@ from ledsim.physics.scene_ids import (  # noqa: F401 (re-exported)
     VehicleMotion,
 )
 from ledsim.physics.sea_scene import apply_sea
-from ledsim.resources import scene_path
 
 #: Former module-level name of the default scene.
 SCENE = scene_path()

@@ -8,8 +8,8 @@ from typing import NamedTuple
 
 import numpy as np
 
-from ledsim.config import LinkConstants
-from ledsim.layout import ReceiverLayout
+from ledsim.constants import LinkConstants
+from ledsim.physics.layout import ReceiverLayout
 
 
 @dataclass(frozen=True)

@@ -3,7 +3,7 @@
 For each photodiode, rays are cast from the photodiode to points on the LED's emitting
 aperture (its centre and a ring). The share of rays that reach the LED scales the direct
 power (partial blockage); the power itself is eq. (pow-d-theta-phi)
-(:func:`ledsim.optics.received_power`) evaluated on MuJoCo's poses with the observer
+(:func:`ledsim.radiometry.optics.received_power`) evaluated on MuJoCo's poses with the observer
 model's constants:
 
     d     = |LED - photodiode|                                   [m]
@@ -20,14 +20,14 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from ledsim.optics import (
+from ledsim.physics.incidence import incidence_geometry, incidence_rate
+from ledsim.physics.world import LinkWorld, WorldError
+from ledsim.radiometry.optics import (
     received_power,
     receiver_response_at,
     transmitter_gain,
     transmitter_gain_at,
 )
-from ledsim.physics.incidence import incidence_geometry, incidence_rate
-from ledsim.physics.world import LinkWorld, WorldError
 from observer.noise import MeasurementNoise
 from observer.rowops import FLOATS
 

@@ -19,10 +19,10 @@ from pathlib import Path
 import numpy as np
 from tqdm.auto import tqdm
 
-from ledsim.config import LinkConstants
+from ledsim.constants import LinkConstants
 from ledsim.errors import LedsimError
-from ledsim.layout import ReceiverLayout
-from ledsim.outputs import atomic_write_bytes
+from ledsim.files.outputs import atomic_write_bytes
+from ledsim.physics.layout import ReceiverLayout
 from ledsim.physics.sensor import IrradianceSensor, SensorReading
 from ledsim.physics.tick import advance, prepare
 from ledsim.physics.world import LinkWorld
@@ -144,7 +144,7 @@ def simulate(world: LinkWorld, sensor: IrradianceSensor, seconds: float,
             ``reset`` for this run.
         controller: ``controller(reading, t) -> torque`` for closed-loop runs.
         progress: show a progress bar.
-        vehicle: a :class:`~ledsim.physics.vehicle.Vehicle` that senses, navigates and
+        vehicle: a :class:`~ledsim.agent.autopilot.Vehicle` that senses, navigates and
             keeps station each step (None: the hull only feels the disturbances).
     """
     Te = world.config.constants.Te

@@ -26,7 +26,7 @@ from ledsim.physics.world import LinkWorld
 
 def prepare(world: LinkWorld, disturbances: Sequence, t: float, vehicle=None) -> None:
     """Start control step ``t`` [s]: the disturbances act, then the kinematics, then the
-    vehicle (:class:`~ledsim.physics.vehicle.Vehicle`, or None) acts."""
+    vehicle (:class:`~ledsim.agent.autopilot.Vehicle`, or None) acts."""
     world.clear_hull_wrench()
     for d in disturbances:
         d.apply(world, t)
@@ -50,7 +50,7 @@ def step_worlds(physics: PhysicsPass, worlds: Sequence[tuple[LinkWorld, Sequence
     """The rest of the tick of many worlds, once each one's torque is commanded: the
     physics of ``worlds`` (``(world, disturbances, t_next)`` each) in one pass of
     ``physics``, each world prepared at its ``t_next`` [s], then the stacked
-    ``vehicles`` (:class:`~ledsim.physics.vehicle.Vehicle`, or None) in one pass at
+    ``vehicles`` (:class:`~ledsim.agent.autopilot.Vehicle`, or None) in one pass at
     ``vehicle_time`` [s] (one time, or one per row)."""
     physics([w for w, _, _ in worlds])
     for world, disturbances, t_next in worlds:

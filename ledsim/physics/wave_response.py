@@ -8,7 +8,7 @@ from typing import NamedTuple
 
 import numpy as np
 
-from ledsim.config import GRAVITY
+from ledsim.constants import GRAVITY
 
 
 class WaveResponse(NamedTuple):
@@ -39,7 +39,7 @@ def free_hull_response(period: float, depth: float, heading: float, height: floa
     from ledsim.physics.scene import WorldConfig
     from ledsim.physics.tick import advance, prepare
     from ledsim.physics.world import LinkWorld
-    from ledsim.radiometry.presets import link_constants
+    from ledsim.radiometry.link_presets import link_constants
 
     c = link_constants(link, 30.0)
     world = LinkWorld(WorldConfig(constants=c, depth=depth))

@@ -13,10 +13,10 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from ledsim.config import LinkConstants
-from ledsim.linkbudget import FEC_LIMIT, ber_ook, snr_at
-from ledsim.optics import receiver_response, transmitter_gain
-from ledsim.results import DictAccess
+from ledsim.constants import LinkConstants
+from ledsim.files.results import DictAccess
+from ledsim.radiometry.data_channel import FEC_LIMIT, ber_ook, snr_at
+from ledsim.radiometry.optics import receiver_response, transmitter_gain
 
 _NODES, _WEIGHTS = np.polynomial.hermite_e.hermegauss(41)
 _WEIGHTS = _WEIGHTS / _WEIGHTS.sum()
@@ -115,7 +115,7 @@ def budget_report(name: str, water: str | None = None, attenuation: float | None
     """The link budget of preset ``name`` in ``water`` (or at beam attenuation
     ``attenuation`` [1/m]) at ``bit_rate`` [bit/s] (default the preset's), at
     ``distances`` [m] (default 12 from a tenth of the FEC range to twice it)."""
-    from ledsim.radiometry.presets import link_constants, preset_named, water_of
+    from ledsim.radiometry.link_presets import link_constants, preset_named, water_of
 
     preset = preset_named(name)
     bit_rate = preset.bit_rate if bit_rate is None else bit_rate

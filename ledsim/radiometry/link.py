@@ -28,7 +28,7 @@ from __future__ import annotations
 import math
 from dataclasses import dataclass
 
-from ledsim.config import LinkConstants, ReceiverResponse
+from ledsim.constants import LinkConstants, ReceiverResponse
 from ledsim.errors import LedsimError
 from ledsim.radiometry.hardware import Detector, ReceiverOptics, Transmitter
 from ledsim.radiometry.water import Water

@@ -1,0 +1,299 @@
+"""What a closed-loop run in MuJoCo is: its configuration, in four parts (the scenarios
+and the other choices are in :mod:`ledsim.loop.registry`)."""
+
+from __future__ import annotations
+
+from dataclasses import asdict, dataclass, fields, replace
+
+from ledsim.agent.autopilot import StationKeeping
+from ledsim.constants import NavigationNoise
+from ledsim.experiment.scenario import Scenario
+from ledsim.loop.registry import (  # noqa: F401 (re-exported)
+    ACQUISITIONS,
+    COMPARED_ESTIMATORS,
+    FILTER_DISTANCES,
+    LOOP_ESTIMATORS,
+    MAX_INITIAL_ANGLE,
+    MIN_FAST_PEAK_SNR,
+    OMEGA_MODELS,
+    PHYSICS_SCENARIOS,
+    peak_snr,
+)
+from ledsim.loop.validation import (  # noqa: F401
+    keeping_gains,
+    navigation_noise,
+    run_from_dict,
+    validate_run,
+)
+from ledsim.physics.disturbances import parse_disturbance
+from ledsim.physics.scene import DEFAULT_DEPTH, WorldConfig
+from ledsim.radiometry.link_presets import default_distance, link_constants, preset_named
+
+
+@dataclass(frozen=True)
+class WorldPart:
+    """The MuJoCo world of an experiment.
+
+    Attributes:
+        distance: link distance d [m] (None: the link preset's, 0.085 m on the paper's
+            bench).
+        torque_limit: gimbal motor torque limit [N m].
+        noise_scale: multiplies the measurement-noise standard deviation [-].
+        scene: MJCF scene file (None: the shipped one).
+        integrator: MuJoCo integrator of the world (``implicitfast``, ``euler``, ...).
+        station_keeping: the vehicle holds its pose on its thrusters, from its own
+            navigation (:class:`~ledsim.agent.autopilot.Vehicle`); off: it drifts.
+        imu_noise: ``key=value`` settings of the vehicle's sensors' noise
+            (:class:`~ledsim.constants.NavigationNoise`'s fields; the rest keep their
+            datasheet figures).
+        station_keeping_gains: ``key=value`` settings of the station keeping's gains
+            (:class:`~ledsim.agent.autopilot.StationKeeping`'s fields).
+        link: the link preset (:data:`ledsim.radiometry.link_presets.LINK_PRESETS`):
+            ``paper``, the paper's bench, or a real LED modem.
+        water: the water type (None: the preset's); ``attenuation``: its beam
+            attenuation c instead [1/m] (None: the type's).
+        bit_rate: the data's bit rate [bit/s] (None: the preset's).
+        depth: the receiver vehicle's depth below the still surface [m] (the waves'
+            decay, the daylight of ``flicker``, the surface in the video).
+        transmitter_depth: the LED's depth [m] (None: the receiver's).
+        receiver_dome: the receiver's head turns inside a dome, out of the water's flow
+            (``--receiver-dome``).
+    """
+
+    distance: float | None = None
+    torque_limit: float = 0.05
+    noise_scale: float = 1.0
+    scene: str | None = None
+    integrator: str = "implicitfast"
+    station_keeping: bool = True
+    imu_noise: tuple[str, ...] = ()
+    station_keeping_gains: tuple[str, ...] = ()
+    link: str = "paper"
+    water: str | None = None
+    attenuation: float | None = None
+    bit_rate: float | None = None
+    depth: float = DEFAULT_DEPTH
+    transmitter_depth: float | None = None
+    receiver_dome: bool = False
+
+    def __post_init__(self) -> None:
+        if self.distance is None:  # the link preset's (0.085 m on the paper's bench)
+            object.__setattr__(self, "distance", default_distance(self.link))
+
+    def navigation_noise(self) -> NavigationNoise:
+        """The vehicle's sensors' noise: the defaults with ``imu_noise`` applied."""
+        return navigation_noise(self.imu_noise)
+
+    def keeping_gains(self) -> StationKeeping:
+        """The station keeping's gains: the defaults with ``station_keeping_gains``."""
+        return keeping_gains(self.station_keeping_gains)
+
+    def world_config(self, distance: float | None = None) -> WorldConfig:
+        """The MuJoCo world (at ``distance`` [m] instead, when given); its control period
+        Te is the link constants' (5 physics steps of 2 ms)."""
+        extra = {} if self.scene is None else {"xml": self.scene}
+        d = self.distance if distance is None else distance
+        return WorldConfig(constants=link_constants(self.link, d, self.water,
+                                                    self.attenuation),
+                           torque_limit=self.torque_limit, integrator=self.integrator,
+                           depth=self.depth, transmitter_depth=self.transmitter_depth,
+                           receiver_dome=self.receiver_dome,
+                           **extra)
+
+
+@dataclass(frozen=True)
+class TaskPart:
+    """What an experiment asks of the loop.
+
+    Attributes:
+        scenario: a key of :data:`PHYSICS_SCENARIOS`.
+        disturbances: disturbance specs ``name[:key=value,...]``.
+        seconds: length of a run [s] (None: the scenario's).
+        supervision: watch the estimate, flag a lost link and reacquire it with a scan
+            (:mod:`ledsim.agent.supervisor`); off: the estimator alone drives the motor.
+        acquisition: how the link is acquired, at the start and after a loss:
+            ``warm-up`` holds the gimbal for the scenario's warm-up while the estimator
+            converges, then slews under the control law at its rate limit, and scans
+            for a lost beam; ``minimum-time`` fixes the beam from the pair of powers and
+            slews there at the torque limit, carried on the encoder, with no warm-up
+            (:mod:`ledsim.agent.slew`; supervised runs; the default).
+        initial_angle: the true incidence angle phi at the start [rad], at rest (None:
+            the scenario's); |phi| <= :data:`MAX_INITIAL_ANGLE`. Beyond about 0.6 rad the
+            LED is outside the receiver's field of view.
+    """
+
+    scenario: str = "align"
+    disturbances: tuple[str, ...] = ()
+    seconds: float | None = None
+    supervision: bool = True
+    initial_angle: float | None = None
+    acquisition: str = "minimum-time"
+
+
+@dataclass(frozen=True)
+class EstimatorPart:
+    """The estimator of an experiment.
+
+    Attributes:
+        estimator: a key of :data:`LOOP_ESTIMATORS`.
+        particles: particle-filter size.
+        checkpoint: KKL checkpoint (None: the shipped one for the distance).
+        omega_model: f of the KKL's Omega correction: the identified one-step model,
+            the simulator itself, or none.
+        filter_distance: what the EKF, UKF and particle filter know of the distance:
+            ``configured`` (their model is the configured distance's) or ``nominal``
+            (the paper distance's model, rescaled by the supervisor's gain tracker: what
+            the KKL knows).
+        imu: the control step uses the vehicle's IMU, DVL and encoder (line-of-sight
+            feed-forward, the hull's motion as a known input of the estimator); off: the
+            photodiodes and the gimbal torque only, as in the paper.
+    """
+
+    estimator: str = "kkl"
+    particles: int = 2000
+    checkpoint: str | None = None
+    omega_model: str = "identified"
+    filter_distance: str = "configured"
+    imu: bool = True
+
+
+@dataclass(frozen=True)
+class ExecutionPart:
+    """How an experiment is run: Monte-Carlo runs (seeds 0..seeds-1) on ``workers``
+    processes, and the window [s] of the per-window metrics it also reports (None:
+    none; :mod:`ledsim.loop.windows`). It never changes a seed's numbers."""
+
+    seeds: int = 4
+    workers: int = 2
+    window: float | None = None
+
+
+PARTS = {"world": WorldPart, "task": TaskPart, "estimation": EstimatorPart,
+         "execution": ExecutionPart}
+
+
+class _PartView:
+    """``run.world`` and the like: one part of a :class:`RunConfig`, read from its flat
+    fields (a new frozen part each time)."""
+
+    def __init__(self, kind):
+        self.kind = kind
+
+    def __get__(self, run, owner=None):
+        if run is None:
+            return self
+        return self.kind(**{f.name: getattr(run, f.name) for f in fields(self.kind)})
+
+
+@dataclass
+class RunConfig:
+    """Everything one ``ledsim run`` needs: its four parts (:class:`WorldPart`,
+    :class:`TaskPart`, :class:`EstimatorPart`, :class:`ExecutionPart`) in one flat,
+    picklable record, whose defaults are the parts'. Build it from parts with
+    :meth:`of`; read a part back with :attr:`world`, :attr:`task`, :attr:`estimation`
+    and :attr:`execution`."""
+
+    scenario: str = TaskPart.scenario
+    estimator: str = EstimatorPart.estimator
+    disturbances: tuple[str, ...] = TaskPart.disturbances
+    distance: float | None = WorldPart.distance
+    torque_limit: float = WorldPart.torque_limit
+    noise_scale: float = WorldPart.noise_scale
+    seeds: int = ExecutionPart.seeds
+    particles: int = EstimatorPart.particles
+    checkpoint: str | None = EstimatorPart.checkpoint
+    omega_model: str = EstimatorPart.omega_model
+    workers: int = ExecutionPart.workers
+    seconds: float | None = TaskPart.seconds
+    scene: str | None = WorldPart.scene
+    supervision: bool = TaskPart.supervision
+    integrator: str = WorldPart.integrator
+    filter_distance: str = EstimatorPart.filter_distance
+    station_keeping: bool = WorldPart.station_keeping
+    imu: bool = EstimatorPart.imu
+    imu_noise: tuple[str, ...] = WorldPart.imu_noise
+    station_keeping_gains: tuple[str, ...] = WorldPart.station_keeping_gains
+    window: float | None = ExecutionPart.window
+    initial_angle: float | None = TaskPart.initial_angle
+    acquisition: str = TaskPart.acquisition
+    link: str = WorldPart.link
+    water: str | None = WorldPart.water
+    attenuation: float | None = WorldPart.attenuation
+    bit_rate: float | None = WorldPart.bit_rate
+    depth: float = WorldPart.depth
+    transmitter_depth: float | None = WorldPart.transmitter_depth
+    receiver_dome: bool = WorldPart.receiver_dome
+
+    def __post_init__(self) -> None:
+        if self.distance is None:  # the link preset's (0.085 m on the paper's bench)
+            self.distance = default_distance(self.link)
+
+    @classmethod
+    def of(cls, world: WorldPart = WorldPart(), task: TaskPart = TaskPart(),
+           estimation: EstimatorPart = EstimatorPart(),
+           execution: ExecutionPart = ExecutionPart()) -> RunConfig:
+        """The run made of these parts."""
+        return cls(**asdict(world), **asdict(task), **asdict(estimation),
+                   **asdict(execution))
+
+    @classmethod
+    def from_dict(cls, saved: dict) -> RunConfig:
+        """The run a saved configuration (``asdict`` of one, through JSON) describes,
+        checked in one line (:func:`~ledsim.loop.validation.run_from_dict`)."""
+        return run_from_dict(cls, saved)
+
+    world = _PartView(WorldPart)
+    task = _PartView(TaskPart)
+    estimation = _PartView(EstimatorPart)
+    execution = _PartView(ExecutionPart)
+
+    def validate(self) -> None:
+        """Raise :class:`LedsimError` naming the first choice or value not allowed."""
+        validate_run(self)
+
+    @property
+    def data_bit_rate(self) -> float:
+        """The data's bit rate [bit/s]: ``bit_rate``, or the link preset's."""
+        return preset_named(self.link).bit_rate if self.bit_rate is None else self.bit_rate
+
+    @property
+    def scenario_spec(self) -> Scenario:
+        """The scenario, started at ``initial_angle`` (at rest) when one is set, and
+        without a warm-up under the ``minimum-time`` acquisition."""
+        spec = PHYSICS_SCENARIOS[self.scenario]
+        if self.initial_angle is not None:
+            spec = replace(spec, x0=(float(self.initial_angle), 0.0))
+        if self.fast_acquisition:
+            spec = replace(spec, warmup=0.0)
+        return spec
+
+    @property
+    def fast_acquisition(self) -> bool:
+        """The ``minimum-time`` acquisition runs: asked for, supervised, the law tracks
+        the beam, and peak SNR >= :data:`MIN_FAST_PEAK_SNR` (but for the oracle)."""
+        return (self.acquisition == "minimum-time" and self.supervision
+                and PHYSICS_SCENARIOS[self.scenario].law.tracks_beam
+                and (self.estimator == "oracle" or peak_snr(
+                    self.world_config().constants, self.noise_scale) >= MIN_FAST_PEAK_SNR))
+
+    @property
+    def steady_from(self) -> float:
+        """Start of the steady-state window [s]: the scenario's, or the second half of a
+        run too short for it (so its RMSE is not empty)."""
+        spec = self.scenario_spec
+        return spec.steady_from if self.run_seconds > spec.steady_from else \
+            0.5 * self.run_seconds
+
+    @property
+    def station_keeps(self) -> bool:
+        """The vehicle keeps station: asked for, and no current says ``hold=0``."""
+        return self.station_keeping and not any(
+            getattr(parse_disturbance(d), "hold", 1.0) == 0.0 for d in self.disturbances)
+
+    @property
+    def run_seconds(self) -> float:
+        return self.scenario_spec.seconds if self.seconds is None else self.seconds
+
+    def world_config(self, distance: float | None = None) -> WorldConfig:
+        """The MuJoCo world of the run (at ``distance`` [m] instead, when given)."""
+        return self.world.world_config(distance)

@@ -1,0 +1,283 @@
+"""The vehicle's own sensors with their noise: IMU (gyro, accelerometer), DVL, the
+gimbal's encoder and an acoustic position fix.
+
+MuJoCo's sensors (``LinkWorld.vehicle_motion``: gyro, accelerometer, velocimeter,
+jointpos, framepos of the shipped scene) give the noise-free values; this module adds
+what a real unit adds (:class:`~ledsim.constants.NavigationNoise`, figures and sources):
+
+==============  =======================================================  ===========
+reading         noise                                                    unit
+==============  =======================================================  ===========
+gyro            white (angle random walk) + a drifting bias             rad/s
+delta_angle     the orientation increment over the step (the IMU's       rad
+                strapdown output, as the MTi-1's DeltaQ), with the
+                same noise integrated over the step
+delta_velocity  the specific force integrated over the step, in the      m/s
+                IMU's frame (the MTi-1's DeltaV), with the
+                accelerometer's noise integrated over the step
+accel           white (velocity random walk) + a drifting bias          m/s^2
+dvl             white per ping; the last ping held between pings         m/s
+encoder         quantised to the encoder's step                          rad
+position_fix    white, once per fix interval (None between fixes); it    m
+                may arrive late, grow with the range to the USBL
+                transceiver and be an outlier (the ``fix_*`` figures)
+depth           white (a pressure sensor), every step; positive down    m
+magnetometer    white, at the magnetometer's rate (None between)         T
+==============  =======================================================  ===========
+
+The DVL pings only while it has bottom lock (``LinkWorld.dvl_bottom_lock``, which the
+``dvl_dropout`` disturbance takes away). Its random numbers come from generators of its
+own, seeded from the run's seed, so turning the IMU on or off never changes the
+photodiodes' noise, and turning the fixes' faults on never changes the other sensors'.
+"""
+
+from __future__ import annotations
+
+import math
+from collections import deque
+from dataclasses import dataclass
+
+import numpy as np
+
+from ledsim.constants import GRAVITY, NavigationNoise
+from ledsim.physics.world import LinkWorld, WorldError
+from observer.rotations import rotation_log
+from observer.rows import Rows
+
+#: Added to the run's seed for the navigation sensors' own generator.
+SEED_OFFSET = 20_000
+#: What an accelerometer at rest reads: gravity's reaction, world frame [m/s^2].
+GRAVITY_REACTION = np.array([0.0, 0.0, GRAVITY])
+
+
+@dataclass
+class NavigationReading:
+    """One control step of the vehicle's sensors, with their noise (see the module
+    docstring): gyro (3,) [rad/s] and accel (3,) [m/s^2] in the IMU frame, dvl (3,)
+    [m/s] in the DVL frame, encoder [rad], position_fix (3,) [m] in the world frame or
+    None when no fix arrived this step, depth [m] of the IMU below its start, positive
+    down (a pressure sensor), dvl_fresh: the DVL pinged this step, dvl_gyro: the gyro's
+    reading at the DVL's last ping (to take the lever arm off that ping's velocity),
+    delta_angle (3,) [rad]: the IMU's orientation increment since the last step, in its
+    frame; delta_velocity (3,) [m/s]: the specific force integrated since the last
+    step, in its current frame (a strike's velocity change included, which a sampled
+    accelerometer misses); dvl_valid: the DVL has bottom lock (else ``dvl`` is the last
+    ping, stale); magnetometer (3,) [T] in the IMU frame, or None when none arrived this
+    step; fix_time [s]: when the fix that arrived was measured; fix_std [m]: the fix's
+    expected error, each axis, as the USBL reports it (its outliers not included)."""
+
+    gyro: np.ndarray
+    accel: np.ndarray
+    dvl: np.ndarray
+    encoder: float
+    position_fix: np.ndarray | None
+    depth: float = 0.0
+    dvl_fresh: bool = True
+    dvl_gyro: np.ndarray | None = None
+    delta_angle: np.ndarray | None = None
+    delta_velocity: np.ndarray | None = None
+    dvl_valid: bool = True
+    magnetometer: np.ndarray | None = None
+    fix_time: float | None = None
+    fix_std: float | None = None
+
+    def row(self, i: int) -> NavigationReading:
+        """Vehicle ``i``'s reading of one taken for N vehicles (NaN fixes as None)."""
+        fixed = not math.isnan(self.fix_time[i])
+        mag = self.magnetometer
+        return NavigationReading(
+            self.gyro[i], self.accel[i], self.dvl[i], float(self.encoder[i]),
+            self.position_fix[i] if fixed else None, float(self.depth[i]),
+            bool(self.dvl_fresh[i]), self.dvl_gyro[i], self.delta_angle[i],
+            self.delta_velocity[i], bool(self.dvl_valid[i]),
+            None if mag is None or math.isnan(mag[i, 0]) else mag[i],
+            float(self.fix_time[i]) if fixed else None,
+            float(self.fix_std[i]) if fixed else None)
+
+
+@dataclass(frozen=True)
+class SensorBiases:
+    """The IMU's biases in a reading: gyro (3,) [rad/s] and accelerometer (3,)
+    [m/s^2] (the truth a navigation filter's estimate is measured against)."""
+
+    gyro: np.ndarray
+    accel: np.ndarray
+
+
+class NavigationSensor(Rows):
+    """The vehicle's sensors of ``world``, read once per control step ``Te`` [s].
+
+    Args:
+        world: the scene (it must have the vehicle's sensors: ``imu_gyro``, ``imu_accel``,
+            ``dvl_velocity``, ``gimbal_encoder``, ``acoustic_fix``).
+        Te: control period [s].
+        seed: the run's seed.
+        noise: the noise figures (None: :class:`~ledsim.constants.NavigationNoise`'s).
+
+    :meth:`Rows.stacked` makes one sensor of several vehicles' (one per world, each with
+    its own generators): its :meth:`read_rows` reads them all, every row as its own
+    sensor would.
+    """
+
+    ROW_ARRAYS = ("gyro_bias", "accel_bias", "k", "_outliers", "surface", "_dvl",
+                  "_has_dvl", "_dvl_gyro", "_attitude", "_velocity")
+    ROW_LISTS = ("worlds", "rngs", "fault_rngs", "_fix_queues")
+
+    def __init__(self, world: LinkWorld, Te: float, seed: int = 0,
+                 noise: NavigationNoise | None = None):
+        if world.ids.vehicle_sensors is None:
+            raise WorldError(f"the scene lacks the vehicle's sensor"
+                             f"{'s' if len(world.ids.missing_sensors) > 1 else ''} "
+                             f"{', '.join(world.ids.missing_sensors)}: run it with --no-imu")
+        self.single, self.n = True, 1
+        self.worlds = [world]
+        self.Te = Te
+        self.noise = noise or NavigationNoise()
+        n = self.noise
+        self.rngs = [np.random.default_rng(SEED_OFFSET + seed)]
+        self.fault_rngs = [np.random.default_rng([SEED_OFFSET + seed, 1])]  # fixes' faults
+        # measured, not yet arrived: (arrival, time, fix, std)
+        self._fix_queues: list[deque] = [deque()]
+        self._biases = SensorBiases(np.zeros((1, 3)), np.zeros((1, 3)))  # the last reading's
+        self._outliers = np.zeros(1, dtype=int)  # fixes made outliers so far
+        root_bandwidth = math.sqrt(1.0 / (2.0 * Te))
+        self.gyro_std = n.gyro_noise_density * root_bandwidth
+        self.accel_std = n.accel_noise_density * root_bandwidth
+        self.gyro_bias = self.rngs[0].standard_normal((1, 3)) * n.gyro_bias_instability
+        self.accel_bias = self.rngs[0].standard_normal((1, 3)) * n.accel_bias_instability
+        decay = (math.exp(-Te / n.gyro_bias_time), math.exp(-Te / n.accel_bias_time))
+        self._decay = decay
+        root_te = math.sqrt(Te)
+        self._scale = (np.array([[self.gyro_std], [n.gyro_noise_density],
+                                 [n.accel_noise_density], [self.accel_std],
+                                 [n.gyro_bias_instability], [n.accel_bias_instability]]),
+                       np.array([[1.0], [root_te], [root_te], [1.0],
+                                 [math.sqrt(1 - decay[0]**2)],
+                                 [math.sqrt(1 - decay[1]**2)]]))
+        self.k = np.zeros(1, dtype=np.int64)
+        self._dvl, self._has_dvl = np.zeros((1, 3)), np.zeros(1, dtype=bool)
+        self._dvl_gyro = np.zeros((1, 3))
+        self.surface = np.array([float(world.vehicle_motion().position[2])])  # depth 0
+        self._attitude = world.hull_rotation[None]  # for the delta angle and velocity
+        self._velocity = world.hull_velocity()[3:].copy()[None]  # the IMU's, world frame
+
+    @property
+    def world(self) -> LinkWorld:
+        return self.worlds[0]
+
+    @property
+    def rng(self) -> np.random.Generator:
+        return self.rngs[0]
+
+    @property
+    def biases(self) -> SensorBiases:
+        """The IMU's biases in the last reading (each (3,); (N, 3) for N vehicles)."""
+        b = self._biases
+        return SensorBiases(b.gyro[0], b.accel[0]) if self.single else b
+
+    @property
+    def outliers(self):
+        """Fixes made outliers so far (per vehicle for N)."""
+        return int(self._outliers[0]) if self.single else self._outliers
+
+    def _due(self, rate: float) -> np.ndarray:
+        """A measurement at ``rate`` [Hz] falls in this control step (step 0 included),
+        per vehicle."""
+        return np.array([k == 0 or math.floor(k * self.Te * rate + 1e-9)
+                         > math.floor((k - 1) * self.Te * rate + 1e-9)
+                         for k in self.k.tolist()])
+
+    def read(self) -> NavigationReading:
+        """The readings of this control step (the world's current state)."""
+        r = self.read_rows()
+        return r.row(0) if self.single else r
+
+    def read_rows(self) -> NavigationReading:
+        """Every vehicle's readings, as one :class:`NavigationReading` with a leading
+        axis of N on each field (``position_fix``, ``fix_time``, ``fix_std``: NaN where
+        none arrived; ``magnetometer``: None when none was read)."""
+        n, Te, N = self.noise, self.Te, self.n
+        truths = [w.vehicle_motion() for w in self.worlds]
+        lock = np.array([w.dvl_bottom_lock for w in self.worlds])
+        fresh = (self._due(n.dvl_rate) & lock) | ~self._has_dvl
+        fix_due = self._due(n.fix_rate)
+        mag_due = self._due(n.magnetometer_rate) & (truths[0].magnetometer is not None)
+        # Each vehicle's draws in one call, in the order a reading has always taken them.
+        draws = [rng.standard_normal(18 + 3 * f + 3 * x + 1 + 3 * m) for rng, f, x, m in
+                 zip(self.rngs, fresh.tolist(), fix_due.tolist(), mag_due.tolist(),
+                     strict=True)]
+        # The six white draws times their figures, as each line below once scaled its
+        # own: gyro, delta angle, delta velocity, accelerometer, the two bias drifts.
+        noise = (np.array([d[:18] for d in draws]).reshape(N, 6, 3) * self._scale[0]) \
+            * self._scale[1]
+        true = np.array([(t.gyro, t.accel) for t in truths])
+        gyro = true[:, 0] + self.gyro_bias + noise[:, 0]
+        attitude = np.array([w.hull_rotation for w in self.worlds])
+        delta = rotation_log(self._attitude.swapaxes(1, 2) @ attitude) \
+            + Te * self.gyro_bias + noise[:, 1]
+        self._attitude = attitude
+        velocity = np.array([w.hull_velocity()[3:] for w in self.worlds])
+        dv = (attitude.swapaxes(1, 2) @ (velocity - self._velocity + Te * GRAVITY_REACTION)
+              [..., None])[..., 0] + Te * self.accel_bias + noise[:, 2]
+        self._velocity = velocity
+        accel = true[:, 1] + self.accel_bias + noise[:, 3]
+        self._biases = SensorBiases(self.gyro_bias, self.accel_bias)  # replaced below
+        # Gauss-Markov biases of stationary spread the bias instability.
+        self.gyro_bias = self._decay[0] * self.gyro_bias + noise[:, 4]
+        self.accel_bias = self._decay[1] * self.accel_bias + noise[:, 5]
+        fix, fix_time, fix_std = np.empty((N, 3)), np.empty(N), np.empty(N)
+        for a in (fix, fix_time, fix_std):
+            a.fill(np.nan)
+        depth = np.empty(N)
+        mag = None
+        if mag_due.any():
+            mag = np.empty((N, 3))
+            mag.fill(np.nan)
+        for i, (t, d) in enumerate(zip(truths, draws, strict=True)):
+            at = 18
+            if fresh[i]:
+                self._dvl[i] = t.dvl + d[at:at + 3] * n.dvl_noise
+                self._dvl_gyro[i] = gyro[i]
+                self._has_dvl[i] = True
+                at += 3
+            if fix_due[i]:
+                self._measure_fix(i, t.position, d[at:at + 3])
+                at += 3
+            got = self._arrived(i)
+            if got[0] is not None:
+                fix[i], fix_time[i], fix_std[i] = got
+            depth[i] = self.surface[i] - t.position[2] + d[at] * n.depth_noise
+            if mag_due[i]:
+                mag[i] = t.magnetometer + d[at + 1:at + 4] * n.magnetometer_noise
+        step = n.encoder_step
+        encoder = np.array([step * math.floor(t.encoder / step + 0.5) for t in truths])
+        self.k = self.k + 1
+        return NavigationReading(gyro, accel, self._dvl.copy(), encoder, fix, depth,
+                                 fresh & lock, self._dvl_gyro.copy(), delta, dv, lock, mag,
+                                 fix_time, fix_std)
+
+    def _measure_fix(self, i: int, position: np.ndarray, white: np.ndarray) -> None:
+        """A fix of vehicle ``i``'s ``position`` [m] measured now: its error grows with
+        the range to the transceiver, it may be an outlier, and it arrives
+        ``fix_latency`` s later."""
+        n, t = self.noise, int(self.k[i]) * self.Te
+        r = self.worlds[i].usbl_range() or 0.0
+        std = math.hypot(n.fix_noise, n.fix_range_error * r)
+        fix = position + white * std
+        if n.fix_outlier_share > 0:
+            faults = self.fault_rngs[i]
+            outlier = faults.random() < n.fix_outlier_share
+            extra = faults.standard_normal(3) * n.fix_outlier_size
+            if outlier:
+                fix = fix + extra
+                self._outliers[i] += 1
+        self._fix_queues[i].append((t + n.fix_latency, t, fix, std))
+
+    def _arrived(self, i: int) -> tuple[np.ndarray | None, float | None, float | None]:
+        """The fix of vehicle ``i`` that arrives this step (the latest, if several did),
+        its measurement time [s] and expected error [m]; Nones when none arrives."""
+        t, got, queue = int(self.k[i]) * self.Te, (None, None, None), self._fix_queues[i]
+        while queue and queue[0][0] <= t + 1e-9:
+            _, measured, fix, std = queue.popleft()
+            got = (fix, measured, std)
+        return got
