@@ -14,8 +14,37 @@ import importlib.abc
 import importlib.util
 import sys
 
-# old module -> its home now (aliases; observer/ grouped by what it estimates, issue 47)
-MOVED: dict[str, str] = {}
+# old module -> its home now (aliases; observer/ grouped by what it estimates, issue 47).
+# observer.kkl, observer.navigation and observer.supervision became the packages of their
+# groups; each package lends its old module's names (see its __init__).
+MOVED: dict[str, str] = {
+    "observer.bank": "observer.kkl.bank",
+    "observer.checkpoint": "observer.kkl.checkpoint",
+    "observer.checkpoint_io": "observer.kkl.checkpoint_io",
+    "observer.export": "observer.kkl.export",
+    "observer.errors": "observer.exceptions",
+    "observer.fading": "observer.supervision.fading",
+    "observer.fitting": "observer.kkl.fitting",
+    "observer.gain_tracking": "observer.supervision.gain_tracking",
+    "observer.gainmaps": "observer.kkl.gainmaps",
+    "observer.gimbal_load": "observer.supervision.gimbal_load",
+    "observer.handover": "observer.kkl.handover",
+    "observer.hull_loads": "observer.navigation.hull_loads",
+    "observer.ins": "observer.navigation.ins",
+    "observer.ins_aiding": "observer.navigation.ins_aiding",
+    "observer.ins_state": "observer.navigation.ins_state",
+    "observer.line_of_sight": "observer.navigation.line_of_sight",
+    "observer.maps": "observer.kkl.maps",
+    "observer.nets": "observer.kkl.nets",
+    "observer.occlusion": "observer.supervision.occlusion",
+    "observer.oracle": "observer.baselines.oracle",
+    "observer.rotations": "observer.navigation.rotations",
+    "observer.scheduled": "observer.kkl.scheduled",
+    "observer.scheduled_checkpoint": "observer.kkl.scheduled_checkpoint",
+    "observer.scheduled_design": "observer.kkl.scheduled_design",
+    "observer.scheduled_training": "observer.kkl.scheduled_training",
+    "observer.training": "observer.kkl.training",
+}
 
 
 class MovedModules(importlib.abc.MetaPathFinder, importlib.abc.Loader):
@@ -37,6 +66,23 @@ class MovedModules(importlib.abc.MetaPathFinder, importlib.abc.Loader):
     def exec_module(self, module):
         # the import system stamped the alias's spec on the module; give it its own back
         module.__spec__ = module.__spec__.loader_state
+
+
+def lent_names(module: str):
+    """A package's ``__getattr__`` that lends it the names of ``module``: the package took
+    the old module's path (``observer.kkl``), so ``from observer.kkl import KKLObserver``
+    still works (an alias; new code imports from ``module``)."""
+    package = module.rpartition(".")[0]
+
+    def __getattr__(name: str):
+        if not name.startswith("__"):
+            try:
+                return getattr(importlib.import_module(module), name)
+            except AttributeError:
+                pass
+        raise AttributeError(f"module {package!r} has no attribute {name!r}")
+
+    return __getattr__
 
 
 def install(table: dict[str, str]) -> None:

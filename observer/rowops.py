@@ -17,7 +17,7 @@ from types import SimpleNamespace
 
 import numpy as np
 
-from observer.rotations import libm_square, per_element
+from observer.navigation.rotations import libm_square, per_element
 
 #: Plain floats (one row).
 FLOATS = SimpleNamespace(

@@ -24,9 +24,9 @@ from ledsim.experiment.observer_presets import DEFAULT_RATES, observer_preset
 from ledsim.files.outputs import atomic_write_text
 from ledsim.paper.model import LEDLinkModel
 from ledsim.paper.scenarios import Noise, get_scenario, run
-from observer.kkl import KKLDesign, series_encoder
+from observer.kkl.fixed_gain import KKLDesign, series_encoder
+from observer.kkl.training import TrainingConfig, train_kkl
 from observer.metrics import converged, rmse
-from observer.training import TrainingConfig, train_kkl
 
 ROOT = Path(__file__).resolve().parent.parent
 

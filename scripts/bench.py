@@ -32,9 +32,9 @@ from ledsim.experiment.observer_presets import observer_preset
 from ledsim.files.outputs import atomic_write_text
 from ledsim.paper.evaluate import default_checkpoint
 from ledsim.paper.model import LEDLinkModel
-from observer import checkpoint
 from observer.baselines import ExtendedKalmanFilter, ParticleFilter, UnscentedKalmanFilter
-from observer.training import train_kkl
+from observer.kkl import checkpoint
+from observer.kkl.training import train_kkl
 
 ROOT = Path(__file__).resolve().parent.parent
 
@@ -157,7 +157,7 @@ def transition_speed(n: int = 20_000) -> dict[str, float]:
     ``scripts/train_mujoco.py`` generates them): one at a time, and batched
     (``mujoco.rollout`` + a world batch) on 1 and 2 threads."""
     from ledsim.physics.gimbal_system import GimbalSystem
-    from observer.training import generate_transitions
+    from observer.kkl.training import generate_transitions
 
     out = {}
     for label, threads, batch_min in (("one at a time", 1, 10**12),
@@ -207,7 +207,7 @@ def onnx_step_speed(steps: int = 2000) -> dict:
     from ledsim.loop.estimation import identified_model
     from ledsim.physics.gimbal_system import GimbalSystem
     from ledsim.physics.scene import WorldConfig
-    from observer.export import kkl_step_graph
+    from observer.kkl.export import kkl_step_graph
 
     system = GimbalSystem(WorldConfig())
     model = identified_model(system)

@@ -76,7 +76,7 @@ def maps_one_by_one(estimators) -> float:
 
 
 def _stacked(m, v: np.ndarray, ws, ss) -> np.ndarray:
-    """``m`` (a :class:`~observer.gainmaps.GainTableMap`) of each row of ``v`` (N, 1,
+    """``m`` (a :class:`~observer.kkl.gainmaps.GainTableMap`) of each row of ``v`` (N, 1,
     n_in) at its own gain and noise: the rows of one grid gain through one stacked
     product per layer."""
     out = np.empty((v.shape[0], m.n_out))

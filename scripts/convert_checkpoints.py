@@ -16,7 +16,7 @@ import sys
 from pathlib import Path
 
 from ledsim.files.outputs import atomic_write_bytes
-from observer import checkpoint
+from observer.kkl import checkpoint
 
 SHIPPED = Path(__file__).resolve().parent.parent / "ledsim" / "assets" / "checkpoints"
 

@@ -57,7 +57,7 @@ def ablation_checkpoints(folder: Path) -> list[tuple[str, str]]:
     from ledsim.constants import LinkConstants
     from ledsim.physics.gimbal_system import GimbalSystem
     from ledsim.physics.scene import WorldConfig
-    from observer import checkpoint as ckpt
+    from observer.kkl import checkpoint as ckpt
 
     src = shipped_checkpoint(0.085, "mujoco", design="scheduled")
     base = ckpt.load(src, GimbalSystem(WorldConfig(constants=LinkConstants())))

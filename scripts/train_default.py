@@ -11,7 +11,7 @@ from ledsim.experiment.observer_presets import observer_preset
 from ledsim.files.outputs import save_checkpoint
 from ledsim.paper.evaluate import default_checkpoint
 from ledsim.paper.model import LEDLinkModel
-from observer.training import train_kkl
+from observer.kkl.training import train_kkl
 
 
 def main() -> None:

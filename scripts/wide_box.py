@@ -23,7 +23,7 @@ from ledsim.loop.report import run_many
 from ledsim.loop.run_config import RunConfig
 from ledsim.physics import gimbal_system as physics_system
 from ledsim.physics.scene import WorldConfig
-from observer.training import generate_transitions, train_kkl
+from observer.kkl.training import generate_transitions, train_kkl
 
 CASES = {"undisturbed": (), "vibration 1 Hz high": ("vibration:frequency=1,torque=1,force=4",)}
 

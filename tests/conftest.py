@@ -34,7 +34,7 @@ def system():
 def tiny_observer(system):
     """A small KKL observer trained in a few seconds (default recipe, fewer samples)."""
     from ledsim.experiment.observer_presets import observer_preset
-    from observer.training import train_kkl
+    from observer.kkl.training import train_kkl
 
     design, cfg = observer_preset("default", system.Te)
     cfg.n_samples = 30_000

@@ -5,9 +5,9 @@ import pytest
 
 from ledsim.constants import LinkConstants
 from ledsim.paper.model import LEDLinkModel
-from observer.bank import ObserverBank
-from observer.errors import ObserverError
 from observer.estimator import Estimator
+from observer.exceptions import ObserverError
+from observer.kkl.bank import ObserverBank
 
 
 class Recorder(Estimator):

@@ -7,7 +7,7 @@ from ledsim.constants import LinkConstants
 from ledsim.paper.evaluate import default_checkpoint
 from ledsim.paper.model import LEDLinkModel
 from ledsim.paper.scenarios import Noise, get_scenario, run
-from observer import checkpoint
+from observer.kkl import checkpoint
 from observer.metrics import rmse
 
 

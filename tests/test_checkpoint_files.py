@@ -16,7 +16,7 @@ import numpy as np
 import pytest
 
 from ledsim.files.resources import checkpoint_dir, shipped_checkpoint
-from observer import checkpoint
+from observer.kkl import checkpoint
 
 #: sha256 (its first 128 bits) of each shipped checkpoint's format, metadata and arrays
 #: (:func:`_digest`), taken from its .pt file by ``torch.load(..., weights_only=True)``

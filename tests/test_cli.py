@@ -227,7 +227,7 @@ def test_workers_die_with_their_parent(tmp_path):
 
 def test_train_design_deep_trains_a_gradient_decoder_of_two_layers(tmp_path):
     from ledsim.paper.model import LEDLinkModel
-    from observer import checkpoint
+    from observer.kkl import checkpoint
 
     out = tmp_path / "deep.pt"
     r = run_cli("train", "--design", "deep", "--samples", "1000", "-q", "--out", str(out))

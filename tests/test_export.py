@@ -30,8 +30,8 @@ def test_the_closed_form_step_matches_numpy_with_inputs_and_dropouts():
     from ledsim import LEDLinkModel, LinkConstants
     from ledsim.paper import Noise, get_scenario, run
     from ledsim.paper.evaluate import default_checkpoint
-    from observer import checkpoint
-    from observer.export import kkl_step_graph
+    from observer.kkl import checkpoint
+    from observer.kkl.export import kkl_step_graph
 
     model = LEDLinkModel(LinkConstants())
     kkl = checkpoint.load(default_checkpoint(0.085), model)

@@ -17,9 +17,9 @@ from ledsim.loop.run_metrics import run_metrics
 from ledsim.loop.windows import window_metrics
 from ledsim.paper.model import LEDLinkModel
 from ledsim.radiometry.optics import pair_phi_variance, pair_power, pair_shape_inverse
-from observer.gain_tracking import GainTracker
-from observer.gimbal_load import LoadObserver
-from observer.supervision import ResidualMonitor
+from observer.supervision.gain_tracking import GainTracker
+from observer.supervision.gimbal_load import LoadObserver
+from observer.supervision.monitor import ResidualMonitor
 
 C = LinkConstants()
 

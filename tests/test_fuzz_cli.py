@@ -51,7 +51,7 @@ import ledsim.loop.table
 import ledsim.loop.video
 import ledsim.paper.evaluate
 import ledsim.physics.simulation
-import observer.training
+import observer.kkl.training
 from ledsim.agent.autopilot import StationKeeping
 from ledsim.cli import CAMERAS, build_parser, main
 from ledsim.constants import PAPER_DISTANCE, NavigationNoise
@@ -305,8 +305,8 @@ def stubs(command: str) -> list[tuple[object, str, object]]:
     real = REAL and command in FORCED
     return {
         "evaluate": [(ledsim.paper.evaluate, "run_jobs", _started)],
-        "train": [(observer.training, "generate_transitions", _started_closing),
-                  (observer.training, "train_kkl", _started)],
+        "train": [(observer.kkl.training, "generate_transitions", _started_closing),
+                  (observer.kkl.training, "train_kkl", _started)],
         "simulate": [] if real else [(ledsim.physics.simulation, "simulate", _started)],
         "run": [] if real else [(report, "run_jobs", _started)],
         "render": [(video, "render_video", _started)],

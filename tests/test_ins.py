@@ -1,4 +1,4 @@
-"""The vehicle's aided INS (observer.ins): gravity levels it, it is consistent, and it
+"""The vehicle's aided INS (observer.navigation.ins): gravity levels it, it is consistent, and it
 holds through the faults real navigation meets (late fixes, outliers, DVL dropouts)."""
 
 from __future__ import annotations
@@ -14,8 +14,8 @@ from ledsim.physics.disturbances import DisturbanceError, parse_disturbance
 from ledsim.physics.nav_sensors import NavigationSensor
 from ledsim.physics.tick import advance, prepare
 from ledsim.physics.world import LinkWorld
-from observer.ins import InsState
-from observer.rotations import rotation_exp, rotation_log
+from observer.navigation.ins import InsState
+from observer.navigation.rotations import rotation_exp, rotation_log
 
 TE = 0.01
 
@@ -102,7 +102,7 @@ def _mean_nees(runs: int, inflate: float = 1.0) -> np.ndarray:
     ``inflate``: the filter is told the sensors' noise that many times too large."""
     from dataclasses import replace
 
-    from observer.ins import AidedINS
+    from observer.navigation.ins import AidedINS
 
     samples = np.arange(150, 3001, 150)
     nees = np.zeros((runs, len(samples)))
@@ -236,7 +236,7 @@ def test_the_load_observer_knows_its_own_noise_and_passes_only_real_loads():
     """In still water its estimates carry the IMU's noise at the variance it computes,
     and it passes on (nearly) nothing; a steady 2 N current and a gust pass; a strike's
     impulse does not stay in the slow estimate."""
-    from observer.hull_loads import HullLoadObserver
+    from observer.navigation.hull_loads import HullLoadObserver
 
     mass = np.array([30.0, 30.0, 30.0, 4.0, 4.0])
     n = NavigationNoise()

@@ -3,9 +3,9 @@ import pytest
 import torch
 
 from ledsim.paper.scenarios import Noise, get_scenario, run
-from observer.errors import ObserverError
-from observer.kkl import KKLDesign, series_encoder, stationary_noise_covariance
-from observer.maps import TanhMLP
+from observer.exceptions import ObserverError
+from observer.kkl.fixed_gain import KKLDesign, series_encoder, stationary_noise_covariance
+from observer.kkl.maps import TanhMLP
 from observer.metrics import rmse
 
 
@@ -52,8 +52,8 @@ def test_deep_numpy_export_matches_torch(rng, layers):
 
 def test_deep_warm_started_decoder_trains_saves_and_loads(system, tmp_path):
     from ledsim.experiment.observer_presets import observer_preset
-    from observer import checkpoint
-    from observer.training import train_kkl
+    from observer.kkl import checkpoint
+    from observer.kkl.training import train_kkl
 
     design, cfg = observer_preset("default", system.Te)
     cfg.n_samples, cfg.hidden, cfg.decoder_hidden = 5000, 60, 40

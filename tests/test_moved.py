@@ -48,3 +48,16 @@ def test_an_alias_to_nowhere_fails_loudly():
     with pytest.raises(ModuleNotFoundError, match="no_such_new_path"):
         importlib.import_module("ledsim.no_such_old_path")
     sys.modules.pop("ledsim.no_such_old_path", None)
+
+
+def test_a_group_lends_the_names_of_the_module_whose_path_it_took():
+    from observer.kkl import KKLObserver
+    from observer.kkl.fixed_gain import KKLObserver as new
+    from observer.supervision import ResidualMonitor
+    from observer.supervision.monitor import ResidualMonitor as new_monitor
+
+    assert KKLObserver is new and ResidualMonitor is new_monitor
+    import observer.navigation
+
+    with pytest.raises(AttributeError, match="no attribute 'NoSuchName'"):
+        observer.navigation.NoSuchName  # noqa: B018

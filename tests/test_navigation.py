@@ -133,7 +133,7 @@ def test_the_thrusters_push_the_hull_within_their_limits():
 
 
 def test_dead_reckoning_follows_a_drifting_turning_hull():
-    from observer.navigation import DeadReckoning
+    from observer.navigation.dead_reckoning import DeadReckoning
 
     w = LinkWorld()
     w.reset()

@@ -29,7 +29,7 @@ LAYOUT_ARRAYS = {"power", "power_clean", "clean", "powers", "y", "y_gated", "yha
 #: a 3-vector helper the scan cannot tell apart. The count may only fall.
 NOT_YET = {"ledsim/agent/laws.py": 3, "ledsim/radiometry/optics.py": 2, "ledsim/paper/model.py": 5,
            "ledsim/physics/gimbal_system.py": 16,
-           "observer/rotations.py": 3, "observer/scheduled_training.py": 1}
+           "observer/navigation/rotations.py": 3, "observer/kkl/scheduled_training.py": 1}
 
 
 def _name(node):

@@ -8,12 +8,12 @@ from conftest import assert_user_error, run_cli
 
 from ledsim.constants import LinkConstants
 from ledsim.paper.model import LEDLinkModel
-from observer import checkpoint as ckpt
-from observer.errors import ObserverError
-from observer.gainmaps import GainTableMap
-from observer.scheduled import GainSchedule, ScheduledDesign, ScheduledKKL
-from observer.scheduled_training import ScheduledTrainingConfig, train_scheduled_kkl
-from observer.training import generate_transitions
+from observer.exceptions import ObserverError
+from observer.kkl import checkpoint as ckpt
+from observer.kkl.gainmaps import GainTableMap
+from observer.kkl.scheduled import GainSchedule, ScheduledDesign, ScheduledKKL
+from observer.kkl.scheduled_training import ScheduledTrainingConfig, train_scheduled_kkl
+from observer.kkl.training import generate_transitions
 
 
 @pytest.fixture(scope="module")
@@ -112,7 +112,7 @@ def test_round_trip_and_refusals(scheduled, system, tmp_path):
                                _run(obs, system, [0.2, 0.0], 200), atol=1e-12)
     with pytest.raises(ckpt.CheckpointError, match="distance"):
         ckpt.load(path, LEDLinkModel(LinkConstants(distance=0.2)))
-    from observer import scheduled_checkpoint as sc
+    from observer.kkl import scheduled_checkpoint as sc
 
     bad = sc.arrays(obs)
     bad["decoder_T_star.coef"] = bad["decoder_T_star.coef"].copy()

@@ -14,8 +14,8 @@ from ledsim.loop.run_config import RunConfig
 from ledsim.loop.run_metrics import link_events
 from ledsim.paper.model import LEDLinkModel
 from ledsim.radiometry.optics import _SHAPE_PHI, _shape_table, pair_power, pair_shape_inverse
-from observer.gain_tracking import GainTracker
-from observer.supervision import ResidualMonitor
+from observer.supervision.gain_tracking import GainTracker
+from observer.supervision.monitor import ResidualMonitor
 
 C = LinkConstants()
 

@@ -14,8 +14,8 @@ from ledsim.constants import NavigationNoise
 from ledsim.physics.disturbances import parse_disturbance
 from ledsim.physics.tick import advance, prepare
 from ledsim.physics.world import LinkWorld
-from observer.hull_loads import HullLoadObserver
-from observer.rotations import libm_square, rotation_exp, rotation_log, skew
+from observer.navigation.hull_loads import HullLoadObserver
+from observer.navigation.rotations import libm_square, rotation_exp, rotation_log, skew
 
 TE = 0.01
 NOISE = NavigationNoise(fix_outlier_share=0.3, fix_range_error=0.01, fix_latency=0.7)

@@ -5,7 +5,7 @@ Once per control step (:func:`ledsim.physics.tick.prepare`), :meth:`Vehicle.act`
 
 1. reads its sensors with their noise (:class:`~ledsim.physics.nav_sensors.NavigationSensor`);
 2. navigates, starting from the known start, with an aided inertial navigation system
-   (:class:`~observer.ins.AidedINS`, an error-state Kalman filter): the IMU's strapdown
+   (:class:`~observer.navigation.ins.AidedINS`, an error-state Kalman filter): the IMU's strapdown
    outputs integrated, corrected by the DVL's pings, the depth sensor, the
    magnetometer (the heading reference) and the acoustic fixes (late ones where they
    were measured, outliers refused by a gate). It levels the attitude against gravity
@@ -22,7 +22,8 @@ Once per control step (:func:`ledsim.physics.tick.prepare`), :meth:`Vehicle.act`
    rest. w is low-passed and shrunk by the share of its power that is the sensors'
    noise (a Wiener gain from the noise figures), so a still hull's feed-forward does not
    turn the gimbal by the DVL's noise; the LED's bearing in the hull's frame integrates
-   it, anchored on the navigated pose (:class:`~observer.line_of_sight.LineOfSightFilter`);
+   it, anchored on the navigated pose
+   (:class:`~observer.navigation.line_of_sight.LineOfSightFilter`);
 4. keeps station (unless told not to): a disturbance observer estimates the water's
    force and torque from the accelerometer and gyro (a fast one and a slow twin), the
    thrusters cancel it, and a soft PD on the navigated pose holds the home pose (surge,
@@ -47,8 +48,8 @@ from ledsim.constants import GRAVITY, NavigationNoise
 from ledsim.physics.batch import cross3
 from ledsim.physics.nav_sensors import GRAVITY_REACTION, NavigationReading, NavigationSensor
 from ledsim.physics.world import LinkWorld
-from observer.ins import FIX_GATE, AidedINS, InertialNoise, InsState
-from observer.line_of_sight import LineOfSight, LineOfSightFilter
+from observer.navigation.ins import FIX_GATE, AidedINS, InertialNoise, InsState
+from observer.navigation.line_of_sight import LineOfSight, LineOfSightFilter
 from observer.rowops import columns, ops
 from observer.rows import Rows
 from observer.rows import matvec as _mv
@@ -171,7 +172,7 @@ class Vehicle(Rows):
 
     @property
     def navigation(self) -> InsState:
-        """The navigation's estimate (:class:`~observer.ins.InsState`)."""
+        """The navigation's estimate (:class:`~observer.navigation.ins.InsState`)."""
         return self.ins.state
 
     @property

@@ -1,6 +1,6 @@
 """The vehicle's station keeping: thrusters that hold the home pose from the navigation.
 
-A disturbance observer (:class:`~observer.hull_loads.HullLoadObserver`) estimates the
+A disturbance observer (:class:`~observer.navigation.hull_loads.HullLoadObserver`) estimates the
 water's force and torque from the IMU and the thrusters cancel it; a soft PD on the
 navigated pose holds the pose (surge, sway, heave, pitch, yaw; each in the hull's
 frame, within the thrusters' limits of the MJCF). Each acts only on what stands out of
@@ -19,8 +19,8 @@ import numpy as np
 from ledsim.constants import ConfigError, NavigationNoise
 from ledsim.errors import check_ranges
 from ledsim.physics.world import LinkWorld
-from observer.hull_loads import HullLoadObserver, soft_deadband
-from observer.ins import InsState
+from observer.navigation.hull_loads import HullLoadObserver, soft_deadband
+from observer.navigation.ins import InsState
 from observer.rowops import columns, ops
 from observer.rows import Rows
 

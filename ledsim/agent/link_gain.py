@@ -1,5 +1,5 @@
 """The gain tracker of a link: its model's gain, its deadband, and the receiver's shape
-inversions (:class:`~observer.gain_tracking.GainTracker` in the loop's terms)."""
+inversions (:class:`~observer.supervision.gain_tracking.GainTracker` in the loop's terms)."""
 
 from __future__ import annotations
 
@@ -13,7 +13,7 @@ from ledsim.radiometry.optics import (
     pair_shape_inverse,
     peak_power,
 )
-from observer.gain_tracking import GainTracker
+from observer.supervision.gain_tracking import GainTracker
 
 
 def model_gain(model, constants: LinkConstants) -> float:
@@ -26,7 +26,7 @@ def model_gain(model, constants: LinkConstants) -> float:
 
 
 #: The gain tracker's deadband on the bench, whose pointing samples carry 3.2 % noise
-#: (``observer.gain_tracking.GainTracker``) [-].
+#: (``observer.supervision.gain_tracking.GainTracker``) [-].
 BENCH_DEADBAND = 0.005
 
 

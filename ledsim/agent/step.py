@@ -42,7 +42,7 @@ import numpy as np
 
 from ledsim.agent.laws import ControlLaw
 from ledsim.constants import LinkConstants
-from observer.gimbal_load import LoadObserver
+from observer.supervision.gimbal_load import LoadObserver
 
 __all__ = ["ControlStep", "Decision", "DirectInput", "GimbalMotor", "LoadObserver",
            "Unsupervised", "identity_gate"]

@@ -1,9 +1,9 @@
 """Link supervision: the same layer over every estimator (KKL, EKF, UKF, PF).
 
 Each control step the supervisor rescales the powers to the estimator's model gain
-(:class:`~observer.gain_tracking.GainTracker`: distance and LED angle scale both
+(:class:`~observer.supervision.gain_tracking.GainTracker`: distance and LED angle scale both
 photodiodes alike), runs the estimator, and checks its estimate against the
-measurements (:class:`~observer.supervision.ResidualMonitor`). While the link is trusted
+measurements (:class:`~observer.supervision.monitor.ResidualMonitor`). While the link is trusted
 it remembers the gimbal's encoder angle. Once it is lost (after the warm-up) it takes
 the motor and runs an :class:`~ledsim.agent.acquisition.AcquisitionScan` around the last
 trusted angle, until the scan sees the beam well enough to re-seed the estimator and
@@ -28,8 +28,8 @@ from ledsim.radiometry.optics import (
     pair_phi_variance,
 )
 from observer.estimator import Estimator
-from observer.occlusion import EncoderCarry
-from observer.supervision import ResidualMonitor
+from observer.supervision.monitor import ResidualMonitor
+from observer.supervision.occlusion import EncoderCarry
 
 #: The scan of a fast acquisition: it only has to bring the beam into view, so it sweeps
 #: at 2 rad/s and widens by most of the field of view each half sweep (the fix takes
@@ -63,7 +63,7 @@ class LinkSupervisor:
             observers follows the tracked gain.
         dead_reckon: while a sample is gated out (an occlusion), the encoder in the line
             of sight's frame carries the estimate, and the estimator restarts from it
-            when the light returns (:class:`~observer.occlusion.EncoderCarry`; for runs
+            when the light returns (:class:`~observer.supervision.occlusion.EncoderCarry`; for runs
             whose encoder angle is in that frame: the IMU's).
         fast: acquire at the torque limit (:class:`~ledsim.agent.slew.FastAcquisition`)
             at the start and after every loss, scanning only while the beam is out of
@@ -114,7 +114,7 @@ class LinkSupervisor:
     def noise_ratio(self) -> float:
         """Measurement noise in the model's gain over the model's nominal noise [-]: the
         sensor's noise over the tracked gain, and what a fading channel adds to the
-        pair's shape (:attr:`~observer.fading.FadingChannel.shape_variance`, as the
+        pair's shape (:attr:`~observer.supervision.fading.FadingChannel.shape_variance`, as the
         noise on each power that would put that variance on phi at the alignment
         target). (Not the monitor's learned noise: fast motion, such as a vibrating
         hull, inflates that and would pick a slow member; the shape's is what the

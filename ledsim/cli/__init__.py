@@ -186,7 +186,7 @@ def _main(argv: list[str]) -> int:
     from ledsim.cli import commands
     from ledsim.cli.parser import EXIT_USAGE, build_parser
     from ledsim.errors import LedsimError
-    from observer.errors import ObserverError
+    from observer.exceptions import ObserverError
 
     parser = build_parser()
     if not argv:  # bare ``ledsim``: say what it takes

@@ -227,7 +227,7 @@ def evaluate(args) -> int:
 
 def train(args) -> int:
     # A .pt name (ledsim 0.2 wrote torch files) writes its .safetensors sibling, which
-    # the same name then loads (observer.checkpoint.resolve).
+    # the same name then loads (observer.kkl.checkpoint.resolve).
     out = check_out_file(args.out, (".safetensors", ".pt"))
     if out.with_suffix(".safetensors").is_dir():
         raise LedsimError(f"--out {str(args.out)!r}: {str(out.with_suffix('.safetensors'))!r} "

@@ -19,8 +19,8 @@ def export(args) -> int:
     from ledsim.files.outputs import atomic_write_bytes
     from ledsim.files.resources import require_shipped_checkpoint
     from ledsim.radiometry.link import constants_from_dict
-    from observer import checkpoint
-    from observer.export import kkl_step_graph
+    from observer.kkl import checkpoint
+    from observer.kkl.export import kkl_step_graph
 
     out = check_out_file(args.out, ".onnx")
     path = args.checkpoint or require_shipped_checkpoint(PAPER_DISTANCE, "mujoco")

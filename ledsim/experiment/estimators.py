@@ -7,7 +7,7 @@ kkl         the learned KKL observer from a checkpoint (validated against the sy
 kkl-paper   the same class, trained with the paper's literal recipe (closed form)
 kkl-handover  the default KKL handing over to a slow-filter KKL after 3 s (closed form)
 kkl-scheduled  the gain-scheduled KKL: maps learned over a range of gains, the gain
-            tuned while it runs (:mod:`observer.scheduled`; MuJoCo loop, where it is
+            tuned while it runs (:mod:`observer.kkl.scheduled`; MuJoCo loop, where it is
             also what ``kkl`` runs under supervision)
 kkl-bank    the bank of fixed-gain KKL observers for 1x-13x noise (MuJoCo loop; the
             supervised ``kkl`` before the scheduled one)
@@ -25,10 +25,10 @@ from dataclasses import dataclass
 from pathlib import Path
 
 from ledsim.errors import LedsimError
-from observer import checkpoint as ckpt
 from observer.baselines import ExtendedKalmanFilter, ParticleFilter, UnscentedKalmanFilter
 from observer.estimator import Estimator
-from observer.handover import HandoverKKL
+from observer.kkl import checkpoint as ckpt
+from observer.kkl.handover import HandoverKKL
 from observer.system import DiscreteSystem
 
 

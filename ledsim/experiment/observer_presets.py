@@ -7,10 +7,10 @@ from __future__ import annotations
 
 from typing import TYPE_CHECKING
 
-from observer.kkl import KKLDesign
+from observer.kkl.fixed_gain import KKLDesign
 
 if TYPE_CHECKING:  # torch is imported only when training
-    from observer.training import TrainingConfig
+    from observer.kkl.training import TrainingConfig
 
 from ledsim.errors import LedsimError
 
@@ -38,7 +38,7 @@ def observer_preset(name: str, Te: float) -> tuple[KKLDesign, TrainingConfig]:
     (``docs/ablation.md``): a decoder of two hidden layers, Adam on every weight of T
     and T* started from the least-squares solution. About 2x the default's error.
     ``"scheduled"`` (the gain-scheduled KKL) is trained by :func:`train_preset`."""
-    from observer.training import TrainingConfig
+    from observer.kkl.training import TrainingConfig
 
     if name == "paper":
         return KKLDesign.paper(Te), TrainingConfig(
@@ -68,23 +68,23 @@ def train_preset(system, name: str, samples: int, seed: int, data=None,
                  progress: bool = False):
     """Train the observer of preset ``name`` on ``system`` (``samples`` uniform
     transitions from ``seed``, or ``data`` = (x, f(x), h(x)) given); returns the observer
-    and a :class:`~observer.training.TrainingReport`.
+    and a :class:`~observer.kkl.training.TrainingReport`.
 
-    ``"scheduled"`` is the gain-scheduled KKL (:mod:`observer.scheduled`): its maps are
+    ``"scheduled"`` is the gain-scheduled KKL (:mod:`observer.kkl.scheduled`): its maps are
     learned over a range of gains, and it tunes its own gain while it runs
     (``docs/observer.md``). Its report's ``loss_dyn`` is the squared dynamics residual
     over z's spread at the worst grid gain, ``loss_recon`` the squared reconstruction
     error over the domain half-widths (nominal noise, mean over the grid)."""
     import numpy as np
 
-    from observer.training import TrainingReport, generate_transitions, train_kkl
+    from observer.kkl.training import TrainingReport, generate_transitions, train_kkl
 
     if name != "scheduled":
         design, cfg = observer_preset(name, system.Te)
         cfg.n_samples, cfg.seed = samples, seed
         return train_kkl(system, design, cfg, data=data, progress=progress)
-    from observer.scheduled import ScheduledDesign
-    from observer.scheduled_training import ScheduledTrainingConfig, train_scheduled_kkl
+    from observer.kkl.scheduled import ScheduledDesign
+    from observer.kkl.scheduled_training import ScheduledTrainingConfig, train_scheduled_kkl
 
     cfg = ScheduledTrainingConfig(seed=seed)
     if data is None:

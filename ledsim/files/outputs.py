@@ -115,10 +115,10 @@ def atomic_write_text(path: Path, text: str) -> None:
 
 
 def save_checkpoint(obs, path: str | Path, extra: dict | None = None) -> Path:
-    """:func:`observer.checkpoint.save` through :func:`atomic_write_bytes` (so Ctrl-C
+    """:func:`observer.kkl.checkpoint.save` through :func:`atomic_write_bytes` (so Ctrl-C
     leaves no checkpoint behind). Returns the checkpoint's path (``.safetensors``, also
     for a ``.pt`` name)."""
-    from observer import checkpoint
+    from observer.kkl import checkpoint
 
     return checkpoint.save(obs, path, extra, write_bytes=lambda p, data: atomic_write_bytes(
         p, lambda tmp: Path(tmp).write_bytes(data)))

@@ -47,8 +47,8 @@ from ledsim.physics.simulation import SimulationResult
 from ledsim.physics.tick import PhysicsPass, step_worlds
 from ledsim.physics.world import LinkWorld
 from ledsim.radiometry.optics import nominal_noise_std, peak_power
+from observer.baselines.oracle import Oracle
 from observer.noise import MeasurementNoise
-from observer.oracle import Oracle
 from observer.recording import RecordingEstimator
 
 #: Steps between two reports of a run's progress (montecarlo.report_progress).

@@ -2,12 +2,12 @@
 
 The Bayesian filters (EKF, UKF, particle filter) use the identified one-step model of
 the run's own world. The KKL, without ``--checkpoint`` and under supervision, is the
-shipped gain-scheduled KKL of :data:`REFERENCE_DISTANCE` (:mod:`observer.scheduled`):
+shipped gain-scheduled KKL of :data:`REFERENCE_DISTANCE` (:mod:`observer.kkl.scheduled`):
 the supervisor rescales the powers to the reference gain and tells the observer the
 noise those rescaled powers carry, which sets its gain's floor and its decoder. One
 observer thus serves every distance. ``kkl-bank`` is the former default: the bank of
 fixed-gain observers trained for the noise levels :data:`BANK_NOISE`
-(:class:`observer.bank.ObserverBank`), which runs the member for the noise measured.
+(:class:`observer.kkl.bank.ObserverBank`), which runs the member for the noise measured.
 """
 
 from __future__ import annotations
@@ -24,8 +24,8 @@ from ledsim.physics.gimbal_system import GimbalSystem, IdentifiedGimbalModel
 from ledsim.physics.scene import WorldConfig
 from ledsim.radiometry.link_presets import kkl_reference_constants, preset_named
 from ledsim.radiometry.optics import peak_power, receiver_saturates
-from observer import checkpoint as ckpt
-from observer.bank import ObserverBank
+from observer.kkl import checkpoint as ckpt
+from observer.kkl.bank import ObserverBank
 from observer.noise import MeasurementNoise
 
 #: Distance [m] of the shipped MuJoCo KKL bank that serves every distance.

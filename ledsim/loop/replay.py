@@ -23,8 +23,8 @@ import numpy as np
 from ledsim.errors import LedsimError
 from ledsim.files.results import DictAccess
 from ledsim.loop.run_config import RunConfig
-from observer.errors import ObserverError
-from observer.kkl import KKLObserver
+from observer.exceptions import ObserverError
+from observer.kkl.fixed_gain import KKLObserver
 from observer.recording import CALLS, difference, replay_calls
 
 #: What a replayable trace must hold: each array's dtype kinds (numpy's ``dtype.kind``)

@@ -39,7 +39,7 @@ def train_mujoco_observer(distance: float = PAPER_DISTANCE, noise_scale: float =
             :func:`~ledsim.radiometry.link_presets.kkl_reference_constants`).
     """
     from ledsim.experiment.observer_presets import train_preset
-    from observer.training import generate_transitions
+    from observer.kkl.training import generate_transitions
 
     constants = LinkConstants(distance=distance) if constants is None else constants
     system = GimbalSystem(noisier(WorldConfig(constants=constants), noise_scale),

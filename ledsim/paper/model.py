@@ -59,7 +59,7 @@ class LEDLinkModel(DiscreteSystem):
         return np.stack([x[..., 0] + self.Te * x[..., 1], x[..., 1] + self.Te * u], axis=-1)
 
     def step_form(self):
-        """f and h for an exported observer (:class:`observer.export.StepForm`)."""
+        """f and h for an exported observer (:class:`observer.kkl.export.StepForm`)."""
         return step_form((self.Te, 0.0, 0.0), (1.0, self.Te, 0.0), self.cp_bar,
                          self.constants, self.output_low, self.output_high)
 

@@ -206,7 +206,7 @@ class IdentifiedGimbalModel(DiscreteSystem):
         return layout_power(self.power_gain, self.constants.layout.angle(x), self.constants)
 
     def step_form(self):
-        """f and h for an exported observer (:class:`observer.export.StepForm`)."""
+        """f and h for an exported observer (:class:`observer.kkl.export.StepForm`)."""
         return step_form(self.coef_phi, self.coef_rate, self.power_gain, self.constants,
                          self.output_low, self.output_high)
 

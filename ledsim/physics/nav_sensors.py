@@ -41,7 +41,7 @@ import numpy as np
 
 from ledsim.constants import GRAVITY, NavigationNoise
 from ledsim.physics.world import LinkWorld, WorldError
-from observer.rotations import rotation_log
+from observer.navigation.rotations import rotation_log
 from observer.rows import Rows
 
 #: Added to the run's seed for the navigation sensors' own generator.

@@ -180,7 +180,7 @@ def link_constants(name: str = "paper", distance: float | None = None,
 #: analog noise, which dithers the ADC's averaged conversions: 4e-5 to 1e-4 at luma's
 #: half range in the three waters, 1e-3 near the range). The bank's members are learned
 #: for 1-13 times it and the scheduled KKL for 1-16 times it
-#: (``observer.scheduled.ScheduledDesign.noise_range``).
+#: (``observer.kkl.scheduled.ScheduledDesign.noise_range``).
 KKL_REFERENCE_NOISE = 5e-5
 
 

@@ -217,9 +217,9 @@ def _shape_table(r: ReceiverResponse, dphi: float) -> np.ndarray:
 
 
 def step_form(coef_phi, coef_rate, gain: float, c: LinkConstants, output_low, output_high):
-    """The :class:`observer.export.StepForm` of a system whose h is
+    """The :class:`observer.kkl.export.StepForm` of a system whose h is
     ``gain x [g(phi), g(phi + dphi)]`` [W] (what an exported observer computes)."""
-    from observer.export import StepForm
+    from observer.kkl.export import StepForm
 
     r = c.receiver
     return StepForm(tuple(float(v) for v in coef_phi), tuple(float(v) for v in coef_rate),

@@ -4,8 +4,8 @@ from __future__ import annotations
 
 import numpy as np
 
-from observer.errors import ObserverError
 from observer.estimator import Estimator, ToldNoise, usable_mask
+from observer.exceptions import ObserverError
 from observer.system import DiscreteSystem
 
 

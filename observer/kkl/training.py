@@ -25,8 +25,8 @@ import numpy as np
 import torch
 from tqdm.auto import tqdm
 
-from observer.errors import ObserverError
-from observer.fitting import (
+from observer.exceptions import ObserverError
+from observer.kkl.fitting import (
     adam,
     features,
     init_features,
@@ -34,8 +34,8 @@ from observer.fitting import (
     set_output,
     solve_encoder_output,
 )
-from observer.kkl import KKLDesign, KKLObserver, stationary_noise_covariance
-from observer.maps import TanhMLP
+from observer.kkl.fixed_gain import KKLDesign, KKLObserver, stationary_noise_covariance
+from observer.kkl.maps import TanhMLP
 from observer.system import DiscreteSystem
 
 

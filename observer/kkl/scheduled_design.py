@@ -1,5 +1,5 @@
 """The gain-scheduled KKL's design (the family of filter banks its maps are learned
-for) and its gain schedule (:mod:`observer.scheduled`)."""
+for) and its gain schedule (:mod:`observer.kkl.scheduled`)."""
 
 from __future__ import annotations
 
@@ -8,7 +8,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from observer.errors import ObserverError
+from observer.exceptions import ObserverError
 
 
 @dataclass(frozen=True)

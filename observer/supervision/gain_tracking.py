@@ -8,7 +8,7 @@ import math
 
 import numpy as np
 
-from observer.fading import FadingChannel
+from observer.supervision.fading import FadingChannel
 from observer.system import DiscreteSystem
 
 
@@ -29,7 +29,7 @@ class GainTracker:
 
     A fading channel (scintillation) scales both powers together too, but sample by
     sample, faster than any filter of the gain can follow: each sample is also taken on
-    its own (:meth:`sample`) by a :class:`~observer.fading.FadingChannel`, which learns
+    its own (:meth:`sample`) by a :class:`~observer.supervision.fading.FadingChannel`, which learns
     the fading and divides it out of the sample's common scale (``fade``).
 
     The estimator sees ``y / ratio`` (divided by the sample's fade when one is
@@ -59,7 +59,7 @@ class GainTracker:
         deadband_moving: the same while the filter sees a trend [-].
         max_std: samples whose log-gain standard deviation exceeds this are not used
             (at 0.1 it went blind 0.06 rad off the peak at d = 0.15 m: 9% gain drift).
-        fade_time, phi_variance: the :class:`~observer.fading.FadingChannel`'s.
+        fade_time, phi_variance: the :class:`~observer.supervision.fading.FadingChannel`'s.
     """
 
     def __init__(self, system: DiscreteSystem, shape_inverse, model_gain: float,

@@ -13,9 +13,9 @@ from __future__ import annotations
 
 import numpy as np
 
-from observer.errors import ObserverError
 from observer.estimator import Estimator
-from observer.kkl import KKLObserver
+from observer.exceptions import ObserverError
+from observer.kkl.fixed_gain import KKLObserver
 
 
 class HandoverKKL(Estimator):

@@ -8,7 +8,7 @@ one still reads, by ``torch.load(..., weights_only=True)`` where torch is instal
 :func:`convert` rewrites it as ``.safetensors``. A ``.pt`` name stands for its
 ``.safetensors`` sibling where there is one (:func:`resolve`).
 
-:mod:`observer.checkpoint` builds observers from these and checks them against a run.
+:mod:`observer.kkl.checkpoint` builds observers from these and checks them against a run.
 """
 
 from __future__ import annotations
@@ -21,8 +21,8 @@ from typing import NamedTuple
 
 import numpy as np
 
-from observer import scheduled_checkpoint
-from observer.errors import ObserverError
+from observer.exceptions import ObserverError
+from observer.kkl import scheduled_checkpoint
 
 FORMAT = "ledsim-kkl/1"
 #: The formats a checkpoint's header may name.

@@ -26,9 +26,9 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from observer.errors import ObserverError
-from observer.kkl import KKLObserver
-from observer.nets import NumpyMLP
+from observer.exceptions import ObserverError
+from observer.kkl.fixed_gain import KKLObserver
+from observer.kkl.nets import NumpyMLP
 
 OPSET = 17
 

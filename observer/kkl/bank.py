@@ -14,8 +14,8 @@ import math
 
 import numpy as np
 
-from observer.errors import ObserverError
 from observer.estimator import Estimator
+from observer.exceptions import ObserverError
 
 
 class ObserverBank(Estimator):

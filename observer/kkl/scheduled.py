@@ -4,7 +4,7 @@ filter gains, and a schedule that slows the filters as the estimate settles.
 A fixed filter bank averages the noise over about its slowest time constant, while a
 Kalman filter's gain shrinks as it becomes sure. Here one number ``w`` (the gain) sets
 the bank: at gain w each output's filters have rates from ``slowest x w`` to
-``fastest`` (:class:`~observer.scheduled_design.ScheduledDesign`), eigenvalues
+``fastest`` (:class:`~observer.kkl.scheduled_design.ScheduledDesign`), eigenvalues
 ``l_i(w) = 1 - Te r_i(w)``. The encoder ``T(x; w)`` and the decoder ``T*(z; w, s)``
 are learned for every ``w`` of a range (and every noise level ``s``), in the averaged
 coordinates
@@ -29,8 +29,8 @@ import math
 import numpy as np
 
 from observer.estimator import Estimator, usable_mask
-from observer.gainmaps import GainTableMap
-from observer.scheduled_design import GainSchedule, ScheduledDesign
+from observer.kkl.gainmaps import GainTableMap
+from observer.kkl.scheduled_design import GainSchedule, ScheduledDesign
 from observer.system import DiscreteSystem
 
 __all__ = ["GainSchedule", "ScheduledDesign", "ScheduledKKL"]
@@ -42,7 +42,7 @@ class ScheduledKKL(Estimator):
     Args:
         system: what it computes with (f for Omega, h for missing samples, Te).
         design: the family of banks.
-        encoder_T: x -> z at gain w (:class:`~observer.gainmaps.GainTableMap`).
+        encoder_T: x -> z at gain w (:class:`~observer.kkl.gainmaps.GainTableMap`).
         decoder_T_star: z -> x at gain w and noise s, for a state anywhere in the domain.
         decoder_locked: the same for a state near the operating point (the design's
             ``lock_box``), used while the first one's estimate is well inside that box

@@ -45,9 +45,9 @@ from collections import deque
 
 import numpy as np
 
-from observer.ins_aiding import BA, BG, FIX_GATE, N_ERROR, TH, InsAiding, P, V
-from observer.ins_state import InertialNoise, InsState
-from observer.rotations import rotation_exp, rotation_log, skew
+from observer.navigation.ins_aiding import BA, BG, FIX_GATE, N_ERROR, TH, InsAiding, P, V
+from observer.navigation.ins_state import InertialNoise, InsState
+from observer.navigation.rotations import rotation_exp, rotation_log, skew
 from observer.rows import Rows
 from observer.rows import matvec as _mv
 from observer.rows import transposed as _T

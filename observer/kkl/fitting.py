@@ -10,7 +10,7 @@ import numpy as np
 import torch
 from tqdm.auto import tqdm
 
-from observer.maps import TanhMLP
+from observer.kkl.maps import TanhMLP
 
 
 def cosine_lr(opt, step, total, lr0, lr1):

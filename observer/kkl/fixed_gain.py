@@ -15,9 +15,9 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from observer.errors import ObserverError
 from observer.estimator import Estimator, usable_mask
-from observer.nets import NumpyMLP
+from observer.exceptions import ObserverError
+from observer.kkl.nets import NumpyMLP
 from observer.system import DiscreteSystem
 
 

@@ -1,4 +1,4 @@
-"""What the aided INS (:mod:`observer.ins`) is told and what it estimates: its sensors'
+"""What the aided INS (:mod:`observer.navigation.ins`) is told and what it estimates: its sensors'
 noise figures and its state."""
 
 from __future__ import annotations

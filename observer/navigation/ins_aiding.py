@@ -1,4 +1,4 @@
-"""The aiding updates of :class:`~observer.ins.AidedINS`, over the rows of its
+"""The aiding updates of :class:`~observer.navigation.ins.AidedINS`, over the rows of its
 vehicles: the Kalman correction with a DVL ping, a depth reading, a magnetometer
 reading or an acoustic fix, each for the vehicles ``rows`` that have one this step.
 Stacked matrix products and inverses give every row what the filter of one vehicle
@@ -8,7 +8,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from observer.rotations import libm_square, rotation_exp, skew
+from observer.navigation.rotations import libm_square, rotation_exp, skew
 from observer.rows import matvec as _mv
 from observer.rows import transposed as _T
 
@@ -20,7 +20,7 @@ FIX_GATE = 21.11
 
 
 class InsAiding:
-    """The updates, mixed into :class:`~observer.ins.AidedINS` (which holds ``states``,
+    """The updates, mixed into :class:`~observer.navigation.ins.AidedINS` (which holds ``states``,
     ``Ps``, ``noise``, ``field``, the DVL's geometry and the displacement history)."""
 
     def _correct(self, rows, residual: np.ndarray, H: np.ndarray, Rm: np.ndarray,

@@ -1,6 +1,6 @@
 """Inference of the KKL maps: tanh networks (one hidden layer, or more) on numpy arrays.
 
-Training happens in torch (:mod:`observer.maps`); :meth:`TanhMLP.export` folds the
+Training happens in torch (:mod:`observer.kkl.maps`); :meth:`TanhMLP.export` folds the
 normalisations into the weights, so inference is exactly ``W2 tanh(W1 v + b1) + b2``
 and needs neither torch nor its import time.
 """

@@ -2,7 +2,7 @@
 
 Inputs and outputs are normalised with fixed affine maps so the trainable layers see
 O(1) numbers; :meth:`TanhMLP.export` folds those maps into the weights of a
-:class:`~observer.nets.NumpyMLP`.
+:class:`~observer.kkl.nets.NumpyMLP`.
 """
 
 from __future__ import annotations
@@ -11,7 +11,7 @@ import numpy as np
 import torch
 from torch import nn
 
-from observer.nets import NumpyMLP
+from observer.kkl.nets import NumpyMLP
 
 
 class TanhMLP(nn.Module):

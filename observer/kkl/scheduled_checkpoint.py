@@ -1,7 +1,7 @@
 """The gain-scheduled KKL in a checkpoint: its tables of output weights, and its design
 and schedule in the metadata (format ``ledsim-kkl-scheduled/1``).
 
-:func:`observer.checkpoint.save` and :func:`observer.checkpoint.load` dispatch here, so a
+:func:`observer.kkl.checkpoint.save` and :func:`observer.kkl.checkpoint.load` dispatch here, so a
 scheduled checkpoint is a ``.safetensors`` file like every other, and is checked against
 the run like every other (Te and the model constants in its metadata).
 """
@@ -10,8 +10,8 @@ from __future__ import annotations
 
 import numpy as np
 
-from observer.gainmaps import GainTableMap
-from observer.scheduled import GainSchedule, ScheduledDesign, ScheduledKKL
+from observer.kkl.gainmaps import GainTableMap
+from observer.kkl.scheduled import GainSchedule, ScheduledDesign, ScheduledKKL
 
 FORMAT = "ledsim-kkl-scheduled/1"
 _MAPS = ("encoder_T", "decoder_T_star", "decoder_locked")

@@ -1,6 +1,6 @@
 """Learning the gain-scheduled KKL's maps T(x; w) and T*(z; w, s): Algorithm 1 on a grid
 of gains, with random tanh features and exact least-squares output layers
-(``docs/observer.md``, :mod:`observer.gainmaps`).
+(``docs/observer.md``, :mod:`observer.kkl.gainmaps`).
 
 * T: one hidden layer phi(x) for every gain. For z component i (rate r_i, output j) at
   gain w, ``T_i(f(x)) = l T_i(x) + (1 - l) y_j`` with ``l = 1 - Te r_i(w)`` is linear in
@@ -21,11 +21,11 @@ from dataclasses import asdict, dataclass
 import numpy as np
 from tqdm.auto import tqdm
 
-from observer.errors import ObserverError
-from observer.fitting import ridge_solve
-from observer.gainmaps import GainTableMap
-from observer.kkl import stationary_noise_covariance
-from observer.scheduled import GainSchedule, ScheduledDesign, ScheduledKKL
+from observer.exceptions import ObserverError
+from observer.kkl.fitting import ridge_solve
+from observer.kkl.fixed_gain import stationary_noise_covariance
+from observer.kkl.gainmaps import GainTableMap
+from observer.kkl.scheduled import GainSchedule, ScheduledDesign, ScheduledKKL
 from observer.system import DiscreteSystem
 
 

@@ -1,7 +1,7 @@
 """Saving and loading trained KKL observers: weights plus JSON metadata.
 
 A checkpoint is one ``.safetensors`` file holding the observer's arrays and, in its
-header, the format's name and the metadata (:mod:`observer.checkpoint_io`), with a
+header, the format's name and the metadata (:mod:`observer.kkl.checkpoint_io`), with a
 readable ``.json`` copy of the metadata beside it; both are written atomically. Loading
 needs no torch and executes nothing in the file, and checks the metadata (Te, A, B,
 model constants) against the system it is loaded for. A ``.pt`` checkpoint of ledsim 0.2
@@ -18,8 +18,8 @@ from pathlib import Path
 
 import numpy as np
 
-from observer import scheduled_checkpoint
-from observer.checkpoint_io import (  # noqa: F401 (re-exported)
+from observer.kkl import scheduled_checkpoint
+from observer.kkl.checkpoint_io import (  # noqa: F401 (re-exported)
     FORMAT,
     SUFFIX,
     CheckpointError,
@@ -32,9 +32,9 @@ from observer.checkpoint_io import (  # noqa: F401 (re-exported)
     target,
     write,
 )
-from observer.kkl import KKLObserver
-from observer.nets import NumpyMLP
-from observer.scheduled import ScheduledKKL
+from observer.kkl.fixed_gain import KKLObserver
+from observer.kkl.nets import NumpyMLP
+from observer.kkl.scheduled import ScheduledKKL
 from observer.system import DiscreteSystem
 
 #: Checkpoint files whose contents a process keeps (:func:`_read_shared`).
@@ -84,7 +84,7 @@ def load(path: str | Path, system: DiscreteSystem, check: bool = True, *,
          name: str | None = None) -> KKLObserver | ScheduledKKL:
     """Load a checkpoint for ``system``; raise :class:`CheckpointError` if it does not fit.
     A gain-scheduled KKL's checkpoint (``ledsim train --design scheduled``) gives a
-    :class:`~observer.scheduled.ScheduledKKL`. ``path``: see :func:`resolve`.
+    :class:`~observer.kkl.scheduled.ScheduledKKL`. ``path``: see :func:`resolve`.
 
     ``model``: what the observer computes with (Omega's f, the h of missing samples;
     default ``system``); ``use_omega``: apply the Omega correction; ``name``: the
