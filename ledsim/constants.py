@@ -96,6 +96,9 @@ class LinkConstants:
         link: the physical link these constants were built from
             (:meth:`ledsim.radiometry.link.RadiometricLink.constants`), whose receiver
             noise depends on the signal; None: the paper's bench, whose noise does not.
+        receiver_layout: the receiver's photodiodes and gimbal axes
+            (:class:`~ledsim.physics.layout.ReceiverLayout`); None: the paper's pair,
+            ``dphi`` apart, on one axis.
     """
 
     Te: float = 0.01
@@ -109,6 +112,7 @@ class LinkConstants:
     process_noise_std: tuple[float, float] = (1e-4, 2e-4)
     receiver: ReceiverResponse = field(default_factory=ReceiverResponse)
     link: PhysicalLink | None = None
+    receiver_layout: ReceiverLayout | None = None
 
     def __post_init__(self) -> None:
         self.validate()
@@ -147,7 +151,10 @@ class LinkConstants:
 
     @functools.cached_property  # read on every model call: once per instance
     def layout(self) -> ReceiverLayout:
-        """The receiver: the paper's pair of photodiodes, Delta phi apart, on one axis."""
+        """The receiver: ``receiver_layout``, or the paper's pair of photodiodes, Delta phi
+        apart, on one axis."""
+        if self.receiver_layout is not None:
+            return self.receiver_layout
         from ledsim.physics.layout import paper_layout
 
         return paper_layout(self.dphi)
@@ -174,6 +181,8 @@ class LinkConstants:
         d["process_noise_std"] = list(self.process_noise_std)
         if self.link is None:
             del d["link"]
+        if self.receiver_layout is None:  # the paper's, from dphi: the metadata keeps its keys
+            del d["receiver_layout"]
         return d
 
     @classmethod
@@ -181,6 +190,10 @@ class LinkConstants:
         d = dict(d)
         d["receiver"] = ReceiverResponse(**d.get("receiver", {}))
         d["process_noise_std"] = tuple(d.get("process_noise_std", (1e-4, 2e-4)))
+        if d.get("receiver_layout") is not None:
+            from ledsim.physics.layout import ReceiverLayout
+
+            d["receiver_layout"] = ReceiverLayout.from_dict(d["receiver_layout"])
         if d.get("link") is not None:
             raise ConfigError("these constants are of a physical link: read them with "
                               "ledsim.radiometry.link.constants_from_dict")

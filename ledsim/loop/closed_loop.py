@@ -28,6 +28,7 @@ from ledsim.agent.slew import TimeOptimalSlew
 from ledsim.agent.step import ControlStep, GimbalMotor, Unsupervised
 from ledsim.agent.supervisor import LinkSupervisor
 from ledsim.experiment.montecarlo import report_progress
+from ledsim.loop.build import build_worlds
 from ledsim.loop.estimation import (  # noqa: F401 (re-exported)
     check_checkpoint,
     identified_model,
@@ -225,9 +226,7 @@ class ClosedLoop:
         # The system's world serves the first run; the others share its model unless a
         # disturbance changes the model (a water current sets its medium velocity).
         share = not any(parse_disturbance(d).changes_model for d in cfg.disturbances)
-        worlds = [self.system.world] + [
-            LinkWorld(self.system.config, share_model_of=self.system.world if share else None)
-            for _ in seeds[1:]]
+        worlds = build_worlds(self.system.config, len(seeds), self.system.world, share)
         self.runs = [LoopRun(cfg, int(s), self.system, self.model, w, self.steps, record)
                      for s, w in zip(seeds, worlds, strict=True)]
         # The runs' vehicles as one (each started as its own): one pass steps them all.

@@ -61,6 +61,7 @@ class GimbalSystem(DiscreteSystem):
         self.threads = int(threads)
         self._batch = None  # GimbalBatch, built on the first large call
         self.config = config or WorldConfig()
+        self.config.constants.layout.validate()  # x = (phi, phidot): one axis
         self.world = LinkWorld(self.config)
         self.sensor = IrradianceSensor(self.world, noise=False)
         c = self.config.constants

@@ -8,8 +8,10 @@ layout's order; the state has an angle and a rate per axis.
 
 The paper's receiver (eq. eq-4a) is :func:`paper_layout`: two photodiodes on one axis,
 the second's normal turned by Delta phi, so that its incidence angle is phi + Delta phi.
-It is the only layout shipped: the scene, the observers' training and the ONNX export
-are built for it, and :meth:`ReceiverLayout.validate` says so for any other.
+It is the only layout the runs support: the observers' training, the control laws and
+the ONNX export are built for it, and :meth:`ReceiverLayout.validate` says so for any
+other. The scene builds more (:meth:`ReceiverLayout.buildable`): a second axis (tilt,
+in elevation) that it lacks, with its motor and encoder, and photodiodes on it.
 
 This module is where a series is tied to its position; everything else names them
 (:meth:`ReceiverLayout.power_columns`, :meth:`ReceiverLayout.state_columns`).
@@ -39,11 +41,13 @@ class Photodiode:
         series: the name of its measured power in traces and results ("p1").
         offset: its incidence angle less the reference photodiode's [rad]: its normal
             is the reference normal turned by ``-offset`` about the gimbal's axis.
+        tilt: the same about the second axis (elevation) [rad]; 0 on a one-axis gimbal.
     """
 
     site: str
     series: str
     offset: float
+    tilt: float = 0.0
 
 
 @dataclass(frozen=True)
@@ -56,6 +60,8 @@ class GimbalAxis:
             encoder (a ``jointpos`` sensor).
         angle, rate: the names of the state's angle [rad] and rate [rad/s] about it
             (the incidence angle of the reference photodiode and its derivative).
+        direction: the hinge's axis in the frame of the body before it (the hull's
+            yoke for the first axis), for a joint the scene lacks and builds.
     """
 
     name: str
@@ -64,6 +70,7 @@ class GimbalAxis:
     encoder: str
     angle: str = "phi"
     rate: str = "phidot"
+    direction: tuple[float, float, float] = (0.0, 0.0, 1.0)
 
 
 @dataclass(frozen=True)
@@ -84,6 +91,16 @@ class ReceiverLayout:
             if len(set(names)) != len(names):
                 raise LayoutError(f"photodiode or axis {kind} names {names!r} repeat: "
                                   "each must be unique")
+        if self.n_axes < 2 and any(p.tilt for p in self.photodiodes):
+            raise LayoutError("a photodiode's tilt turns it about a second axis: this "
+                              "layout has one")
+
+    @classmethod
+    def from_dict(cls, d: dict) -> ReceiverLayout:
+        """The layout ``dataclasses.asdict`` of one describes (JSON metadata)."""
+        return cls(tuple(Photodiode(**p) for p in d["photodiodes"]),
+                   tuple(GimbalAxis(**{**a, "direction": tuple(a.get("direction", (0, 0, 1)))})
+                         for a in d["axes"]))
 
     @property
     def n_photodiodes(self) -> int:
@@ -119,12 +136,19 @@ class ReceiverLayout:
         the link's data (availability, the link budget) ride on it."""
         return self.offsets.index(0.0)
 
+    def buildable(self) -> ReceiverLayout:
+        """Refuse what the scene cannot build: more than two axes (pan, tilt)."""
+        if self.n_axes > 2:
+            raise LayoutError(f"{self.n_axes} gimbal axes cannot be built: the scene "
+                              "turns the head about one axis (pan) or two (pan, tilt)")
+        return self
+
     def validate(self) -> ReceiverLayout:
-        """Refuse what the shipped world cannot simulate yet: one axis and a photodiode
-        with offset 0 (the reference) are needed."""
+        """Refuse what a run cannot use yet: one axis and a photodiode with offset 0
+        (the reference) are needed (the estimators and control laws have one axis)."""
         if self.n_axes != 1:
             raise LayoutError(f"{self.n_axes} gimbal axes are not supported yet: the "
-                              "scene and the observers have one axis")
+                              "estimators and control laws have one axis")
         if 0.0 not in self.offsets:
             raise LayoutError(f"offsets {list(self.offsets)!r} have no reference "
                               "photodiode: one offset must be 0")

@@ -18,6 +18,7 @@ import numpy as np
 from ledsim.constants import MIN_DISTANCE, ConfigError, LinkConstants
 from ledsim.errors import LedsimError, check_ranges
 from ledsim.files.resources import scene_path
+from ledsim.physics.head import build_head, receiver_centre
 from ledsim.physics.scene_ids import (  # noqa: F401 (re-exported)
     MAGNETOMETER,
     THRUSTERS,
@@ -136,17 +137,6 @@ class WorldConfig:
         return round(self.constants.Te / self.timestep)
 
 
-def _rotate_z(v, angle):
-    c, s = math.cos(angle), math.sin(angle)
-    return [c * v[0] - s * v[1], s * v[0] + c * v[1], v[2]]
-
-
-def _set_zaxis(element, direction) -> None:
-    """Orient an MjSpec site/geom so its z axis is ``direction`` (overrides the XML's)."""
-    element.alt.type = mujoco.mjtOrientation.mjORIENTATION_ZAXIS
-    element.alt.zaxis = list(direction)
-
-
 def _set_yaw(element, angle: float) -> None:
     element.alt.type = mujoco.mjtOrientation.mjORIENTATION_QUAT
     element.quat = [math.cos(angle / 2), 0.0, 0.0, math.sin(angle / 2)]
@@ -179,12 +169,11 @@ def build_spec(config: WorldConfig) -> mujoco.MjSpec:
         first = str(exc).strip().splitlines()[0] if str(exc).strip() else type(exc).__name__
         raise WorldError(f"scene file {str(path)!r} is not valid MJCF: {first}") from None
     c = config.constants
-    layout = c.layout.validate()
+    layout = c.layout.buildable()
+    first = layout.axes[0]
     for kind, name in [("body", "auv"), ("body", "gimbal"), ("body", "transmitter"),
-                       ("body", "occluder"),
-                       *(("site", p.site) for p in layout.photodiodes), ("site", "led"),
-                       *(("joint", a.joint) for a in layout.axes),
-                       *(("actuator", a.motor) for a in layout.axes), ("geom", "hull")]:
+                       ("body", "occluder"), ("site", "led"), ("joint", first.joint),
+                       ("actuator", first.motor), ("geom", "hull")]:
         if getattr(spec, kind)(name) is None:
             raise WorldError(f"scene file {str(path)!r} has no {kind} named {name!r}")
     spec.option.timestep = config.timestep
@@ -192,23 +181,13 @@ def build_spec(config: WorldConfig) -> mujoco.MjSpec:
     spec.option.density = config.water_density
     spec.option.viscosity = config.water_viscosity
 
-    # Each photodiode's normal is the reference normal (+x of the gimbal) turned by
-    # -offset about the hinge axis, so its incidence angle is phi + offset (paper eq.
-    # eq-4a: offsets 0 and dphi). The reference photodiode keeps the scene's own normal.
-    sites = [spec.site(p.site) for p in layout.photodiodes]
-    for p, site in zip(layout.photodiodes, sites, strict=True):
-        if p.offset == 0.0:
-            continue
-        normal = _rotate_z([1.0, 0.0, 0.0], -p.offset)
-        _set_zaxis(site, normal)
-        lens = spec.geom(f"{p.site}_lens")
-        if lens is not None:
-            _set_zaxis(lens, normal)
+    # Each photodiode's normal turned to its offsets, so that its incidence angle is
+    # phi + offset (paper eq. eq-4a: offsets 0 and dphi); axes the scene lacks, built.
+    sites = build_head(spec, layout, config.gimbal_damping, WorldError)
 
     # LED at distance d in front of the receiver centre (midpoint of the photodiodes).
     gimbal = spec.body("gimbal")
-    centre_local = np.mean([np.asarray(site.pos) for site in sites], axis=0)
-    centre = np.asarray(gimbal.pos) + centre_local
+    centre = np.asarray(gimbal.pos) + receiver_centre(spec, sites)
     tx = spec.body("transmitter")
     # the LED's depth lifts it out of the receiver's plane; d stays the slant distance
     rise = transmitter_rise(config.depth, config.transmitter_depth, c.distance)

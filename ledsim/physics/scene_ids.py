@@ -21,8 +21,8 @@ class SceneIds:
         hull_body, gimbal_body: body ids of the AUV and of the receiver gimbal.
         photodiode_sites: site ids of the layout's photodiodes, in its order; led_site:
             the LED's site id.
-        hinge_qpos, hinge_dof: the gimbal axis's hinge's address in qpos and in qvel.
-        motor: actuator id of the gimbal axis's motor.
+        hinge_qpos, hinge_dof: the first gimbal axis's hinge's address in qpos and in qvel.
+        motor: actuator id of the first gimbal axis's motor.
         vehicle_sensors: sensordata addresses of the vehicle's sensors, in the order of
             :data:`VEHICLE_SENSORS` (None: the scene lacks one of them).
         thrusters: actuator ids of the hull's surge, sway, heave, pitch and yaw thrusters
@@ -33,6 +33,9 @@ class SceneIds:
         usbl_site: site id of the USBL transceiver the acoustic fixes are measured from
             (None: the scene has none; a fix's error then does not grow with range).
         missing_sensors: names of :data:`VEHICLE_SENSORS` the scene lacks.
+        axes_qpos, axes_dof, motors, encoders: every axis's hinge address in qpos and
+            in qvel, its motor's actuator id and its encoder's sensordata address, in
+            the layout's order (the first is ``hinge_qpos``, ``hinge_dof``, ``motor``).
     """
 
     hull_body: int
@@ -47,13 +50,17 @@ class SceneIds:
     magnetometer: int | None = None
     usbl_site: int | None = None
     missing_sensors: tuple[str, ...] = ()
+    axes_qpos: tuple[int, ...] = ()
+    axes_dof: tuple[int, ...] = ()
+    motors: tuple[int, ...] = ()
+    encoders: tuple[int, ...] = ()
 
     @classmethod
     def of(cls, m, layout: ReceiverLayout | None = None) -> SceneIds:
         """The ids of model ``m`` built for the receiver ``layout`` (None: the paper's)."""
         layout = LinkConstants().layout if layout is None else layout
-        (axis,) = layout.validate().axes
-        hinge = m.joint(axis.joint)
+        axes = layout.buildable().axes
+        hinges = [m.joint(a.joint) for a in axes]
         sensors = [m.sensor(i).name for i in range(m.nsensor)]
         missing = tuple(n for n in VEHICLE_SENSORS if n not in sensors)
         adr = None if missing else tuple(int(m.sensor(n).adr[0]) for n in VEHICLE_SENSORS)
@@ -63,10 +70,15 @@ class SceneIds:
         mag = int(m.sensor(MAGNETOMETER).adr[0]) if MAGNETOMETER in sensors else None
         sites = [m.site(i).name for i in range(m.nsite)]
         usbl = int(m.site("usbl").id) if "usbl" in sites else None
+        qpos = tuple(int(h.qposadr[0]) for h in hinges)
+        dof = tuple(int(h.dofadr[0]) for h in hinges)
+        motors = tuple(int(m.actuator(a.motor).id) for a in axes)
+        encoders = tuple(int(m.sensor(a.encoder).adr[0]) if a.encoder in sensors else -1
+                         for a in axes)
         return cls(int(m.body("auv").id), int(m.body("gimbal").id),
                    tuple(int(m.site(p.site).id) for p in layout.photodiodes),
-                   int(m.site("led").id), int(hinge.qposadr[0]), int(hinge.dofadr[0]),
-                   int(m.actuator(axis.motor).id), adr, thrusters, mag, usbl, missing)
+                   int(m.site("led").id), qpos[0], dof[0], motors[0], adr, thrusters, mag,
+                   usbl, missing, qpos, dof, motors, encoders)
 
 
 #: The vehicle's MuJoCo sensors by name: the IMU's gyro and accelerometer, the DVL (a

@@ -9,6 +9,8 @@ accessor                 meaning                                     unit
 =======================  ==========================================  ===========
 gimbal_angle, _rate      hinge angle q of the receiver gimbal, dq/dt  rad, rad/s
 torque, set_torque       gimbal motor torque (clipped at the limit)  N m
+gimbal_angles, _rates    every axis's q and dq/dt (arrays; gimbal.py)  rad, rad/s
+torques, set_torques     every axis's motor torque (arrays)          N m
 photodiode_pos(i)        position of photodiode i (0 or 1)           m
 photodiode_normal(i)     unit normal of photodiode i                 -
 photodiode_velocity(i)   (angular, linear) velocity of photodiode i  rad/s, m/s
@@ -36,6 +38,7 @@ from contextlib import contextmanager
 import mujoco
 import numpy as np
 
+from ledsim.physics.gimbal import GimbalAccess
 from ledsim.physics.hull import HullAccess
 from ledsim.physics.scene import SCENE, SceneIds, WorldConfig, WorldError, build_spec, set_buoyancy
 
@@ -60,7 +63,7 @@ def _on_mujoco_warning(msg: str) -> None:
     _log.log(level, "MuJoCo: %s", msg.strip())
 
 
-class LinkWorld(HullAccess):
+class LinkWorld(HullAccess, GimbalAccess):
     """The compiled scene plus named accessors; see the module docstring."""
 
     def __init__(self, config: WorldConfig | None = None, *,
@@ -109,10 +112,10 @@ class LinkWorld(HullAccess):
     # -- state and stepping ----------------------------------------------------------------
 
     def reset(self, gimbal_angle: float = 0.0, gimbal_rate: float = 0.0) -> None:
-        """Back to the initial pose with the given gimbal state [rad, rad/s]."""
+        """Back to the initial pose with the given gimbal state [rad, rad/s]: the first
+        axis's (floats) or every axis's (arrays over the axes)."""
         mujoco.mj_resetData(self.model, self.data)
-        self.data.qpos[self._hinge_qpos] = gimbal_angle
-        self.data.qvel[self._hinge_dof] = gimbal_rate
+        self._set_gimbal(gimbal_angle, gimbal_rate)
         self.data.mocap_pos[self._tx_mocap] = self.transmitter_home
         self.data.mocap_pos[self._occluder_mocap] = self.occluder_home
         self.transmitter_velocity[:] = 0
@@ -149,40 +152,6 @@ class LinkWorld(HullAccess):
     @property
     def time(self) -> float:
         return float(self.data.time)
-
-    @property
-    def gimbal_angle(self) -> float:
-        return float(self.data.qpos[self._hinge_qpos])
-
-    @property
-    def gimbal_rate(self) -> float:
-        return float(self.data.qvel[self._hinge_dof])
-
-    @property
-    def torque(self) -> float:
-        return float(self.data.ctrl[self._motor])
-
-    def set_torque(self, torque: float) -> float:
-        """Command the gimbal motor; clipped to the torque limit. Returns what was applied."""
-        lim = self.config.torque_limit
-        applied = min(max(float(torque), -lim), lim)
-        self.data.ctrl[self._motor] = applied
-        return applied
-
-    def add_angular_rate(self, rate: float, hull: bool = False) -> None:
-        """An angular-rate impulse [rad/s] about the vertical: to the gimbal hinge, or
-        (``hull``) to the AUV's yaw."""
-        if hull:
-            self.data.qvel[self._hull_dof + 5] += rate  # free joint: (v, omega), omega z
-        else:
-            self.data.qvel[self._hinge_dof] += rate
-
-    def hinge_inertia(self) -> float:
-        """Gimbal inertia about its hinge incl. armature [kg m^2] (MuJoCo's mass matrix)."""
-        mujoco.mj_forward(self.model, self.data)
-        M = np.zeros((self.model.nv, self.model.nv))
-        mujoco.mj_fullM(self.model, self.data, M)
-        return float(M[self._hinge_dof, self._hinge_dof])
 
     # -- geometry -----------------------------------------------------------------------
 

@@ -1,0 +1,104 @@
+"""The receiver head in the MJCF, built from its layout (:mod:`ledsim.physics.layout`):
+each photodiode's normal, and the gimbal axes the scene lacks.
+
+The shipped scene has one axis: the pan hinge ``gimbal_hinge`` of body ``gimbal``, its
+motor and its encoder, and the paper's pair of photodiodes on it. A second axis of a
+layout (tilt, in elevation) that the scene does not have is built here through
+``mujoco.MjSpec``: a body inside the gimbal turning about the axis's ``direction`` on a
+hinge with the pan hinge's damping and armature, a motor (MuJoCo's ``motor`` actuator on
+the joint) and an encoder (a ``jointpos`` sensor), and the layout's photodiode sites on
+it, spread on a ring on the head's face. The torque limit is applied to every axis's
+motor by the scene.
+"""
+
+from __future__ import annotations
+
+import math
+
+import mujoco
+import numpy as np
+
+from ledsim.errors import LedsimError
+from ledsim.physics.layout import ReceiverLayout
+
+#: Radius of the ring a built axis's photodiodes sit on, on the head's face [m].
+RING_RADIUS = 0.003
+#: Mass [kg] and moment of inertia [kg m^2] of a built axis's head.
+HEAD_MASS, HEAD_INERTIA = 0.005, 2e-7
+
+
+def photodiode_normal(offset: float, tilt: float) -> list[float]:
+    """The normal of a photodiode whose incidence angle is the reference's plus
+    ``offset`` about the pan axis (z) and ``tilt`` about the tilt axis (y) [rad]: the
+    reference normal +x turned by ``-tilt`` about y, then by ``-offset`` about z."""
+    x, z = math.cos(tilt), math.sin(tilt)
+    c, s = math.cos(-offset), math.sin(-offset)
+    return [c * x, s * x, z]
+
+
+def set_zaxis(element, direction) -> None:
+    """Orient an MjSpec site/geom so its z axis is ``direction`` (overrides the XML's)."""
+    element.alt.type = mujoco.mjtOrientation.mjORIENTATION_ZAXIS
+    element.alt.zaxis = list(direction)
+
+
+def add_motor(spec: mujoco.MjSpec, name: str, joint: str) -> None:
+    """A torque motor on ``joint`` (its range is the scene's torque limit)."""
+    spec.add_actuator(name=name, target=joint, trntype=mujoco.mjtTrn.mjTRN_JOINT,
+                      gear=[1, 0, 0, 0, 0, 0])
+
+
+def build_head(spec: mujoco.MjSpec, layout: ReceiverLayout, damping: float,
+               error: type[LedsimError]) -> list:
+    """Turn each photodiode's normal to its offsets, and build the axes the scene lacks
+    (see the module's text); returns the photodiodes' sites, in the layout's order."""
+    body = spec.body("gimbal")
+    if spec.joint(layout.axes[0].joint) is None:
+        raise error(f"the scene has no joint named {layout.axes[0].joint!r} for the "
+                    f"first axis ({layout.axes[0].name})")
+    first_hinge = spec.joint(layout.axes[0].joint)
+    for axis in layout.axes[1:]:
+        if spec.joint(axis.joint) is not None:
+            continue
+        for kind, name in (("body", axis.name), ("actuator", axis.motor),
+                           ("sensor", axis.encoder)):
+            if getattr(spec, kind)(name) is not None:
+                raise error(f"the scene already has a {kind} named {name!r}: axis "
+                            f"{axis.name!r} cannot be built there")
+        body = body.add_body(name=axis.name, pos=[0.0, 0.0, 0.0], mass=HEAD_MASS,
+                             inertia=[HEAD_INERTIA] * 3, explicitinertial=True)
+        body.add_joint(name=axis.joint, type=mujoco.mjtJoint.mjJNT_HINGE,
+                       axis=list(axis.direction), damping=[damping, 0.0, 0.0],
+                       armature=first_hinge.armature)
+        add_motor(spec, axis.motor, axis.joint)
+        spec.add_sensor(name=axis.encoder, type=mujoco.mjtSensor.mjSENS_JOINTPOS,
+                        objtype=mujoco.mjtObj.mjOBJ_JOINT, objname=axis.joint)
+    built = body.name != "gimbal"
+    sites = []
+    for k, p in enumerate(layout.photodiodes):
+        site = spec.site(p.site)
+        if built:
+            if site is not None:
+                raise error(f"photodiode site {p.site!r} is on the scene's pan axis: a "
+                            "layout with a built tilt axis names sites of its own")
+            a = 2.0 * math.pi * k / layout.n_photodiodes
+            site = body.add_site(name=p.site, size=[0.0025, 0, 0], pos=[
+                0.0, RING_RADIUS * math.cos(a), RING_RADIUS * math.sin(a)])
+        elif site is None:
+            raise error(f"the scene has no site named {p.site!r}")
+        sites.append(site)
+        # The reference photodiode keeps the scene's own normal (paper eq. eq-4a: the
+        # second's is turned by -dphi about the hinge).
+        if p.offset == 0.0 and p.tilt == 0.0 and not built:
+            continue
+        normal = photodiode_normal(p.offset, p.tilt)
+        set_zaxis(site, normal)
+        lens = spec.geom(f"{p.site}_lens")
+        if lens is not None:
+            set_zaxis(lens, normal)
+    return sites
+
+
+def receiver_centre(spec: mujoco.MjSpec, sites: list) -> np.ndarray:
+    """The receiver's centre in the gimbal's frame [m]: the photodiodes' midpoint."""
+    return np.mean([np.asarray(site.pos) for site in sites], axis=0)
