@@ -204,7 +204,7 @@ def onnx_step_speed(steps: int = 2000) -> dict:
 
     from ledsim.experiment.estimators import build_estimator
     from ledsim.files.resources import require_shipped_checkpoint
-    from ledsim.loop.estimation import identified_model
+    from ledsim.loop.build.estimation import identified_model
     from ledsim.physics.gimbal_system import GimbalSystem
     from ledsim.physics.scene import WorldConfig
     from observer.kkl.export import kkl_step_graph

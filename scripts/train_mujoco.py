@@ -11,7 +11,7 @@ and the others): the bench with their receiver's response and relative noise
 kkl_mujoco_scheduled_lens_d0.085.safetensors.
 
 ``--bank`` trains the bank the closed loop runs at every distance
-(``ledsim.loop.estimation.BANK``): the observers of d = 0.085 m for 1x, 3x, 6x and 13x
+(``ledsim.loop.build.estimation.BANK``): the observers of d = 0.085 m for 1x, 3x, 6x and 13x
 the nominal measurement noise (what the noise becomes, rescaled to the reference gain,
 at about d = 0.085-0.3 m), saved as kkl_mujoco_d0.085_noise<s>.safetensors (no suffix for 1).
 """
@@ -24,7 +24,7 @@ import os
 from ledsim.cli.options import WORKERS
 from ledsim.files.outputs import save_checkpoint
 from ledsim.files.resources import shipped_checkpoint
-from ledsim.loop.estimation import BANK_NOISE, REFERENCE_DISTANCE
+from ledsim.loop.build.estimation import BANK_NOISE, REFERENCE_DISTANCE
 from ledsim.loop.world_training import train_mujoco_observer
 from ledsim.radiometry.link_presets import kkl_reference_constants
 

@@ -15,8 +15,9 @@ from ledsim.experiment.estimators import (
 
 
 def test_the_lists_are_the_registrys_and_keep_their_old_names_and_order():
-    from ledsim.loop import estimation, validation
     from ledsim.loop import run_config as config
+    from ledsim.loop import validation
+    from ledsim.loop.build import estimation
     from ledsim.paper import evaluate
 
     assert list(ESTIMATORS) == [e.name for e in REGISTRY]

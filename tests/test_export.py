@@ -48,7 +48,8 @@ def test_the_closed_form_step_matches_numpy_with_inputs_and_dropouts():
 def test_ledsim_export_writes_the_shipped_mujoco_step(tmp_path):
     from ledsim.experiment.estimators import build_estimator
     from ledsim.files.resources import require_shipped_checkpoint
-    from ledsim.loop.closed_loop import identified_model, run_once
+    from ledsim.loop.build.estimation import identified_model
+    from ledsim.loop.closed_loop import run_once
     from ledsim.loop.run_config import RunConfig
     from ledsim.physics.gimbal_system import GimbalSystem
 

@@ -8,7 +8,7 @@ import numpy as np
 import pytest
 
 from ledsim.constants import LinkConstants
-from ledsim.loop.build import build_worlds
+from ledsim.loop.build.worlds import build_worlds
 from ledsim.physics import head
 from ledsim.physics.layout import AZIMUTH, GimbalAxis, LayoutError, Photodiode, ReceiverLayout
 from ledsim.physics.scene import WorldConfig, WorldError

@@ -44,7 +44,7 @@ def _warn_saturated(cfg) -> None:
     the full scale of its digitiser, so the aligned samples clip there, and the
     estimators, whose model has no clipping, read a clipped pair of powers as an angle
     off the peak (a biased phi)."""
-    from ledsim.loop.estimation import saturates
+    from ledsim.loop.build.estimation import saturates
     from ledsim.radiometry.optics import peak_power
 
     if saturates(cfg):
@@ -62,7 +62,7 @@ def _warn_unserved(cfg) -> None:
     """Say so when the shipped KKL runs at a distance it is not measured to serve, when
     the link is too weak for the minimum-time acquisition it asks for, and when the
     receiver saturates (:func:`_warn_saturated`)."""
-    from ledsim.loop.estimation import SERVED_DISTANCES, served
+    from ledsim.loop.build.estimation import SERVED_DISTANCES, served
     from ledsim.loop.registry import PHYSICS_SCENARIOS
 
     _warn_saturated(cfg)

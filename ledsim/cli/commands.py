@@ -124,7 +124,7 @@ def demo(args) -> int:
     """Align the receiver from 0.3 rad off with each estimator; print one table."""
     from ledsim.files.outputs import atomic_write_text
     from ledsim.files.results import write_json
-    from ledsim.loop.estimation import check_checkpoint
+    from ledsim.loop.build.estimation import check_checkpoint
     from ledsim.loop.report import run_many, write_run
     from ledsim.loop.run_config import COMPARED_ESTIMATORS, RunConfig
     from ledsim.loop.table import TABLE_HEADER, format_summary

@@ -31,7 +31,7 @@ def export(args) -> int:
 
         system = model = LEDLinkModel(constants)
     elif saved.get("class") == "GimbalSystem":
-        from ledsim.loop.estimation import identified_model
+        from ledsim.loop.build.estimation import identified_model
         from ledsim.physics.gimbal_system import GimbalSystem
         from ledsim.physics.scene import WorldConfig
 

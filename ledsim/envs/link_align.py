@@ -61,8 +61,8 @@ from gymnasium.utils import EzPickle
 
 from ledsim.agent.laws import receiver_peak
 from ledsim.constants import MIN_DISTANCE, LinkConstants
-from ledsim.loop.closed_loop import start_world
-from ledsim.loop.estimation import run_noise
+from ledsim.loop.build.estimation import run_noise
+from ledsim.loop.build.start import start_world
 from ledsim.loop.run_config import MAX_INITIAL_ANGLE, EstimatorPart, RunConfig, TaskPart, WorldPart
 from ledsim.physics.gimbal_system import GimbalSystem
 from ledsim.physics.sensor import SensorReading

@@ -11,8 +11,8 @@ from gymnasium import spaces
 
 from ledsim.agent.step import GimbalMotor
 from ledsim.envs.link_align import LinkAlignEnv
-from ledsim.loop.closed_loop import control_step, dropout_gate, run_supervisor
-from ledsim.loop.estimation import identified_model_of
+from ledsim.loop.build.control import control_step, dropout_gate, run_supervisor
+from ledsim.loop.build.estimation import identified_model_of
 
 
 def torque_action(torque: float, limit: float) -> float:

@@ -13,7 +13,6 @@ estimator.
 
 from __future__ import annotations
 
-import math
 import sys
 import time
 from collections.abc import Callable, Sequence
@@ -22,101 +21,20 @@ import numpy as np
 from tqdm.auto import tqdm
 
 from ledsim.agent.autopilot import Vehicle
-from ledsim.agent.gate import DropoutGate
-from ledsim.agent.laws import intensity_maximum
-from ledsim.agent.slew import TimeOptimalSlew
-from ledsim.agent.step import ControlStep, GimbalMotor, Unsupervised
 from ledsim.agent.supervisor import LinkSupervisor
 from ledsim.experiment.montecarlo import report_progress
-from ledsim.loop.build import build_worlds
-from ledsim.loop.estimation import (  # noqa: F401 (re-exported)
-    check_checkpoint,
-    identified_model,
-    loop_checkpoint,
-    loop_estimator,
-    run_noise,
-)
+from ledsim.loop.build import SeedRun, build_run
 from ledsim.loop.given import GivenRecord
 from ledsim.loop.outcome import Navigation, RunOutcome, RunRecord, Trace, achievable_power, outcome  # noqa: F401
 from ledsim.loop.run_config import RunConfig
-from ledsim.loop.start import Surroundings, start_world  # noqa: F401 (re-exported)
-from ledsim.physics.disturbances import parse_disturbance
 from ledsim.physics.gimbal_system import GimbalSystem
 from ledsim.physics.sensor import SensorReading
 from ledsim.physics.sensor_rows import SensorRows
 from ledsim.physics.simulation import SimulationResult
 from ledsim.physics.tick import PhysicsPass, step_worlds
-from ledsim.physics.world import LinkWorld
-from ledsim.radiometry.optics import nominal_noise_std, peak_power
-from observer.baselines.oracle import Oracle
-from observer.noise import MeasurementNoise
-from observer.recording import RecordingEstimator
 
 #: Steps between two reports of a run's progress (montecarlo.report_progress).
 REPORT_EVERY = 50
-
-
-def make_supervisor(cfg: RunConfig, system: GimbalSystem, estimator, estimator_system,
-                    reacquire: bool, noise: MeasurementNoise) -> LinkSupervisor:
-    """The supervisor of one run with measurement noise ``noise``: its gain prior is
-    the configured distance's over the estimator model's, and its noise prior the noise
-    in the model's gain over the noise that model already carries (for a bank: its
-    nominal noise)."""
-    prior = peak_power(system.constants) / peak_power(estimator_system.constants)
-    carried = (estimator_system.constants.measurement_noise_std
-               / nominal_noise_std(system.constants))
-    return LinkSupervisor(estimator, system.constants, system.inertia,
-                          warmup=cfg.scenario_spec.warmup, reacquire=reacquire,
-                          gain_ratio=prior, noise_ratio=noise.scale / prior / carried,
-                          dead_reckon=cfg.imu,
-                          fast=system.config.torque_limit if cfg.fast_acquisition else None)
-
-
-def run_supervisor(cfg: RunConfig, system: GimbalSystem, model, seed: int,
-                   truth: Callable[[], np.ndarray], reacquire: bool, record: bool = False,
-                   noise: MeasurementNoise | None = None):
-    """The estimator of seed ``seed`` of ``cfg`` under its supervisor (the oracle, which
-    reads ``truth``, and runs without supervision are :class:`Unsupervised`);
-    ``reacquire``: the supervisor may scan for a lost beam; ``record``: the estimator
-    keeps every call it is given (:class:`~observer.recording.RecordingEstimator`);
-    ``noise``: the run's measurement noise (None: :func:`run_noise`)."""
-    if cfg.estimator == "oracle":
-        if not (reacquire and cfg.fast_acquisition):
-            return Unsupervised(Oracle(system, truth))
-        slew = TimeOptimalSlew(system.inertia, system.config.torque_limit, system.Te)
-        return Unsupervised(Oracle(system, truth), slew, intensity_maximum(system.constants))
-    noise = run_noise(cfg, system) if noise is None else noise
-    est, est_system = loop_estimator(cfg, system, model, noise)
-    if record:
-        est = RecordingEstimator(est)
-    est.seed_run(seed)
-    est.reset()
-    if not cfg.supervision:
-        return Unsupervised(est)
-    return make_supervisor(cfg, system, est, est_system, reacquire, noise)
-
-
-def control_step(cfg: RunConfig, system: GimbalSystem, model, seed: int, q_hold: float,
-                 truth: Callable[[], np.ndarray], record: bool = False,
-                 noise: MeasurementNoise | None = None) -> ControlStep:
-    """The control step of seed ``seed`` of ``cfg`` (``ledsim run``'s stack): dropout
-    gate, the estimator under its supervisor (the oracle reads ``truth``), the
-    scenario's law, and the gimbal motor holding ``q_hold`` [rad] during the warm-up;
-    ``record``: the estimator keeps what it is given."""
-    spec = cfg.scenario_spec
-    supervisor = run_supervisor(cfg, system, model, seed, truth, spec.law.tracks_beam,
-                                record, noise)
-    motor = GimbalMotor(system.inertia, q_hold, limit=system.config.torque_limit)
-    return ControlStep(dropout_gate(system.constants, supervisor), supervisor, spec.law,
-                       system.constants, motor, spec.warmup, model=model)
-
-
-def dropout_gate(constants, supervisor) -> DropoutGate:
-    """The gate in front of ``supervisor``. Past max_hold it passes a lasting darkness
-    on, for a link supervisor to see as a blackout; an estimator alone cannot read
-    darkness, so without supervision the gate holds every dark sample."""
-    hold = {} if isinstance(supervisor, LinkSupervisor) else {"max_hold": math.inf}
-    return DropoutGate(constants, **hold)
 
 
 class LoopRun:
@@ -124,17 +42,12 @@ class LoopRun:
     the record of every step (``steps`` rows); with ``record``, also what its estimator
     was given (:mod:`ledsim.loop.given`)."""
 
-    def __init__(self, cfg: RunConfig, seed: int, system: GimbalSystem, model,
-                 world: LinkWorld, steps: int, record: bool = False):
-        self.seed = seed
-        self.world = world
-        self.noise = run_noise(cfg, system)
-        self.sensor, self.disturbances, self.vehicle = start_world(cfg, system, world, seed,
-                                                                   noise=self.noise)
-        self.aided = cfg.imu
-        self.reading: SensorReading | None = None
-        self.step = control_step(cfg, system, model, seed, world.gimbal_angle,
-                                 lambda: self.reading.x, record, self.noise)
+    def __init__(self, built: SeedRun, system: GimbalSystem, steps: int, aided: bool,
+                 record: bool = False):
+        self.seed, self.world, self.noise = built.seed, built.world, built.noise
+        self.sensor, self.disturbances = built.sensor, built.disturbances
+        self.vehicle, self.step, self._latest = built.vehicle, built.step, built.latest
+        self.aided = aided
         self.given = GivenRecord(steps) if record else None
         self.supervised = isinstance(self.step.supervisor, LinkSupervisor)
         lay = system.constants.layout
@@ -167,7 +80,7 @@ class LoopRun:
     def control(self, k: int, t: float, reading: SensorReading | None = None) -> float:
         """Record the sensor's ``reading`` at step ``k`` (time ``t`` [s]; None: read it
         now), and return the motor torque [N m] the control step commands."""
-        r = self.reading = self.sensor.read() if reading is None else reading
+        r = self._latest.reading = self.sensor.read() if reading is None else reading
         self.geo[k] = r.distance, r.emission_angle, r.incidence_angle, r.visible_fraction
         self.state[k] = r.phi, r.phidot
         self.gimbal[k] = r.gimbal_angle, r.gimbal_rate
@@ -194,6 +107,11 @@ class LoopRun:
             self.given.take(k, self.step, los)
         return torque
 
+    @property
+    def reading(self) -> SensorReading | None:
+        """The sensor's last reading."""
+        return self._latest.reading
+
     def result(self, times: np.ndarray) -> SimulationResult:
         return SimulationResult.from_steps(times, self.geo, self.state, self.gimbal,
                                            self.applied, self.power, self.clean, self.hull,
@@ -219,16 +137,11 @@ class ClosedLoop:
         if not seeds:
             raise ValueError("no seeds to run")
         self.cfg = cfg
-        self.system = GimbalSystem(cfg.world_config())
-        self.model = identified_model(self.system)
+        built = build_run(cfg, seeds, record)
+        self.system, self.model, self.steps = built.system, built.model, built.steps
         self.Te = self.system.Te
-        self.steps = int(round(cfg.run_seconds / self.Te))
-        # The system's world serves the first run; the others share its model unless a
-        # disturbance changes the model (a water current sets its medium velocity).
-        share = not any(parse_disturbance(d).changes_model for d in cfg.disturbances)
-        worlds = build_worlds(self.system.config, len(seeds), self.system.world, share)
-        self.runs = [LoopRun(cfg, int(s), self.system, self.model, w, self.steps, record)
-                     for s, w in zip(seeds, worlds, strict=True)]
+        self.runs = [LoopRun(b, self.system, self.steps, cfg.imu, record)
+                     for b in built.seeds]
         # The runs' vehicles as one (each started as its own): one pass steps them all.
         self.vehicles = None
         if self.runs[0].vehicle is not None:

@@ -201,7 +201,7 @@ def trace_config(arrays: dict[str, np.ndarray], path: str | Path | None = None) 
 
 def run_estimator(cfg: RunConfig):
     """A fresh estimator of the run ``cfg`` (its checkpoint, its identified model)."""
-    from ledsim.loop.estimation import identified_model, loop_estimator
+    from ledsim.loop.build.estimation import identified_model, loop_estimator
     from ledsim.physics.gimbal_system import GimbalSystem
 
     system = GimbalSystem(cfg.world_config())

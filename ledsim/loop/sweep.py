@@ -129,7 +129,7 @@ class SweepGrid:
                           ("--noise-scale", self.noise_scales)):
             if not seq:
                 raise LedsimError(f"{name}: give at least one value")
-        from ledsim.loop.estimation import check_checkpoint
+        from ledsim.loop.build.estimation import check_checkpoint
 
         for cell in {Cell(e, d, r, n, 0) for e, d, r, n in itertools.product(
                 self.estimators, self.disturbances, self.distances, self.noise_scales)}:

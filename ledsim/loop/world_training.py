@@ -4,7 +4,7 @@ Data-driven, as the paper's title says: the transitions come from setting MuJoCo
 state, stepping Te and reading the ray sensor
 (:class:`~ledsim.physics.gimbal_system.GimbalSystem`), at the measurement noise
 ``noise_scale`` times the nominal. This is how the closed loop's bank
-(:data:`ledsim.loop.estimation.BANK`) and every MuJoCo observer are made.
+(:data:`ledsim.loop.build.estimation.BANK`) and every MuJoCo observer are made.
 """
 
 from __future__ import annotations
@@ -14,7 +14,7 @@ import time
 import numpy as np
 
 from ledsim.constants import PAPER_DISTANCE, LinkConstants
-from ledsim.loop.estimation import bank_preset, noisier
+from ledsim.loop.build.estimation import bank_preset, noisier
 from ledsim.physics.gimbal_system import GimbalSystem
 from ledsim.physics.scene import WorldConfig
 

@@ -6,7 +6,7 @@ from __future__ import annotations
 from typing import NamedTuple
 
 from ledsim.agent.autopilot import Vehicle
-from ledsim.loop.estimation import run_noise
+from ledsim.loop.build.estimation import run_noise
 from ledsim.loop.run_config import RunConfig
 from ledsim.physics.disturbances import parse_disturbance
 from ledsim.physics.gimbal_system import GimbalSystem

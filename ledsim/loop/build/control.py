@@ -1,0 +1,87 @@
+"""Each seed's control step, assembled from the run's configuration: the dropout gate,
+the estimator (:mod:`ledsim.loop.build.estimation`) under its link supervisor, the
+scenario's control law and the gimbal motor (``ledsim run``'s stack; the environment's
+shipped policy assembles the same)."""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Callable
+
+import numpy as np
+
+from ledsim.agent.gate import DropoutGate
+from ledsim.agent.laws import intensity_maximum
+from ledsim.agent.slew import TimeOptimalSlew
+from ledsim.agent.step import ControlStep, GimbalMotor, Unsupervised
+from ledsim.agent.supervisor import LinkSupervisor
+from ledsim.loop.build.estimation import loop_estimator, run_noise
+from ledsim.loop.run_config import RunConfig
+from ledsim.physics.gimbal_system import GimbalSystem
+from ledsim.radiometry.optics import nominal_noise_std, peak_power
+from observer.baselines.oracle import Oracle
+from observer.noise import MeasurementNoise
+from observer.recording import RecordingEstimator
+
+
+def make_supervisor(cfg: RunConfig, system: GimbalSystem, estimator, estimator_system,
+                    reacquire: bool, noise: MeasurementNoise) -> LinkSupervisor:
+    """The supervisor of one run with measurement noise ``noise``: its gain prior is
+    the configured distance's over the estimator model's, and its noise prior the noise
+    in the model's gain over the noise that model already carries (for a bank: its
+    nominal noise)."""
+    prior = peak_power(system.constants) / peak_power(estimator_system.constants)
+    carried = (estimator_system.constants.measurement_noise_std
+               / nominal_noise_std(system.constants))
+    return LinkSupervisor(estimator, system.constants, system.inertia,
+                          warmup=cfg.scenario_spec.warmup, reacquire=reacquire,
+                          gain_ratio=prior, noise_ratio=noise.scale / prior / carried,
+                          dead_reckon=cfg.imu,
+                          fast=system.config.torque_limit if cfg.fast_acquisition else None)
+
+
+def run_supervisor(cfg: RunConfig, system: GimbalSystem, model, seed: int,
+                   truth: Callable[[], np.ndarray], reacquire: bool, record: bool = False,
+                   noise: MeasurementNoise | None = None):
+    """The estimator of seed ``seed`` of ``cfg`` under its supervisor (the oracle, which
+    reads ``truth``, and runs without supervision are :class:`Unsupervised`);
+    ``reacquire``: the supervisor may scan for a lost beam; ``record``: the estimator
+    keeps every call it is given (:class:`~observer.recording.RecordingEstimator`);
+    ``noise``: the run's measurement noise (None: :func:`run_noise`)."""
+    if cfg.estimator == "oracle":
+        if not (reacquire and cfg.fast_acquisition):
+            return Unsupervised(Oracle(system, truth))
+        slew = TimeOptimalSlew(system.inertia, system.config.torque_limit, system.Te)
+        return Unsupervised(Oracle(system, truth), slew, intensity_maximum(system.constants))
+    noise = run_noise(cfg, system) if noise is None else noise
+    est, est_system = loop_estimator(cfg, system, model, noise)
+    if record:
+        est = RecordingEstimator(est)
+    est.seed_run(seed)
+    est.reset()
+    if not cfg.supervision:
+        return Unsupervised(est)
+    return make_supervisor(cfg, system, est, est_system, reacquire, noise)
+
+
+def control_step(cfg: RunConfig, system: GimbalSystem, model, seed: int, q_hold: float,
+                 truth: Callable[[], np.ndarray], record: bool = False,
+                 noise: MeasurementNoise | None = None) -> ControlStep:
+    """The control step of seed ``seed`` of ``cfg`` (``ledsim run``'s stack): dropout
+    gate, the estimator under its supervisor (the oracle reads ``truth``), the
+    scenario's law, and the gimbal motor holding ``q_hold`` [rad] during the warm-up;
+    ``record``: the estimator keeps what it is given."""
+    spec = cfg.scenario_spec
+    supervisor = run_supervisor(cfg, system, model, seed, truth, spec.law.tracks_beam,
+                                record, noise)
+    motor = GimbalMotor(system.inertia, q_hold, limit=system.config.torque_limit)
+    return ControlStep(dropout_gate(system.constants, supervisor), supervisor, spec.law,
+                       system.constants, motor, spec.warmup, model=model)
+
+
+def dropout_gate(constants, supervisor) -> DropoutGate:
+    """The gate in front of ``supervisor``. Past max_hold it passes a lasting darkness
+    on, for a link supervisor to see as a blackout; an estimator alone cannot read
+    darkness, so without supervision the gate holds every dark sample."""
+    hold = {} if isinstance(supervisor, LinkSupervisor) else {"max_hold": math.inf}
+    return DropoutGate(constants, **hold)
