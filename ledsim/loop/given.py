@@ -11,7 +11,6 @@ configuration: enough to give a fresh estimator of the same kind the same calls.
 from __future__ import annotations
 
 import json
-from dataclasses import asdict
 
 import numpy as np
 
@@ -42,7 +41,7 @@ class GivenRecord:
         out = {**cfg.world_config().constants.layout.power_columns(~measured,
                                                                     prefix="withheld_"),
                "u": u, "u_hull": self.u_hull, "reseeded": self.reseeded,
-               "gain": self.gain, "config": np.array(json.dumps(asdict(cfg)))}
+               "gain": self.gain, "config": np.array(json.dumps(cfg.flat()))}
         if isinstance(estimator, RecordingEstimator):
             out.update(estimator.record.arrays())
         return out

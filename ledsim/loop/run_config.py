@@ -3,7 +3,7 @@ and the other choices are in :mod:`ledsim.loop.registry`)."""
 
 from __future__ import annotations
 
-from dataclasses import asdict, dataclass, fields, replace
+from dataclasses import dataclass, fields, replace
 
 from ledsim.agent.autopilot import StationKeeping
 from ledsim.constants import NavigationNoise
@@ -172,80 +172,62 @@ PARTS = {"world": WorldPart, "task": TaskPart, "estimation": EstimatorPart,
          "execution": ExecutionPart}
 
 
-class _PartView:
-    """``run.world`` and the like: one part of a :class:`RunConfig`, read from its flat
-    fields (a new frozen part each time)."""
-
-    def __init__(self, kind):
-        self.kind = kind
-
-    def __get__(self, run, owner=None):
-        if run is None:
-            return self
-        return self.kind(**{f.name: getattr(run, f.name) for f in fields(self.kind)})
+#: The part each flat name belongs to: ``RunConfig(estimator="ekf")`` sets the
+#: estimation part's ``estimator``.
+FLAT = {f.name: part for part, kind in PARTS.items() for f in fields(kind)}
 
 
-@dataclass
-class RunConfig:
-    """Everything one ``ledsim run`` needs: its four parts (:class:`WorldPart`,
-    :class:`TaskPart`, :class:`EstimatorPart`, :class:`ExecutionPart`) in one flat,
-    picklable record, whose defaults are the parts'. Build it from parts with
-    :meth:`of`; read a part back with :attr:`world`, :attr:`task`, :attr:`estimation`
-    and :attr:`execution`."""
+@dataclass(frozen=True, init=False)
+class RunSpec:
+    """Everything one ``ledsim run`` needs, in four frozen parts: :attr:`world`
+    (:class:`WorldPart`), :attr:`task` (:class:`TaskPart`), :attr:`estimation`
+    (:class:`EstimatorPart`) and :attr:`execution` (:class:`ExecutionPart`).
 
-    scenario: str = TaskPart.scenario
-    estimator: str = EstimatorPart.estimator
-    disturbances: tuple[str, ...] = TaskPart.disturbances
-    distance: float | None = WorldPart.distance
-    torque_limit: float = WorldPart.torque_limit
-    noise_scale: float = WorldPart.noise_scale
-    seeds: int = ExecutionPart.seeds
-    particles: int = EstimatorPart.particles
-    checkpoint: str | None = EstimatorPart.checkpoint
-    omega_model: str = EstimatorPart.omega_model
-    workers: int = ExecutionPart.workers
-    seconds: float | None = TaskPart.seconds
-    scene: str | None = WorldPart.scene
-    supervision: bool = TaskPart.supervision
-    integrator: str = WorldPart.integrator
-    filter_distance: str = EstimatorPart.filter_distance
-    station_keeping: bool = WorldPart.station_keeping
-    imu: bool = EstimatorPart.imu
-    imu_noise: tuple[str, ...] = WorldPart.imu_noise
-    station_keeping_gains: tuple[str, ...] = WorldPart.station_keeping_gains
-    window: float | None = ExecutionPart.window
-    initial_angle: float | None = TaskPart.initial_angle
-    acquisition: str = TaskPart.acquisition
-    link: str = WorldPart.link
-    water: str | None = WorldPart.water
-    attenuation: float | None = WorldPart.attenuation
-    bit_rate: float | None = WorldPart.bit_rate
-    depth: float = WorldPart.depth
-    transmitter_depth: float | None = WorldPart.transmitter_depth
-    receiver_dome: bool = WorldPart.receiver_dome
+    Built from parts (``RunSpec(world=WorldPart(link="luma"))``, or :meth:`of`), from
+    the parts' flat names (``RunSpec(estimator="ekf", seconds=5)``: each sets its part's
+    field; the parts not named keep their defaults), or both. Every flat name reads back
+    as an attribute (``spec.estimator``), and ``dataclasses.replace(spec,
+    estimator="ukf")`` takes flat names too. :data:`RunConfig` is its former name.
+    """
 
-    def __post_init__(self) -> None:
-        if self.distance is None:  # the link preset's (0.085 m on the paper's bench)
-            self.distance = default_distance(self.link)
+    world: WorldPart
+    task: TaskPart
+    estimation: EstimatorPart
+    execution: ExecutionPart
+
+    def __init__(self, world: WorldPart | None = None, task: TaskPart | None = None,
+                 estimation: EstimatorPart | None = None,
+                 execution: ExecutionPart | None = None, **flat):
+        given = {"world": world, "task": task, "estimation": estimation,
+                 "execution": execution}
+        changes: dict[str, dict] = {}
+        for name, value in flat.items():
+            if name not in FLAT:
+                raise TypeError(f"{type(self).__name__}() got an unexpected keyword "
+                                f"argument {name!r}")
+            changes.setdefault(FLAT[name], {})[name] = value
+        for part, kind in PARTS.items():
+            own = changes.get(part, {})
+            value = kind(**own) if given[part] is None else replace(given[part], **own)
+            object.__setattr__(self, part, value)
 
     @classmethod
     def of(cls, world: WorldPart = WorldPart(), task: TaskPart = TaskPart(),
            estimation: EstimatorPart = EstimatorPart(),
-           execution: ExecutionPart = ExecutionPart()) -> RunConfig:
+           execution: ExecutionPart = ExecutionPart()) -> RunSpec:
         """The run made of these parts."""
-        return cls(**asdict(world), **asdict(task), **asdict(estimation),
-                   **asdict(execution))
+        return cls(world, task, estimation, execution)
 
     @classmethod
-    def from_dict(cls, saved: dict) -> RunConfig:
-        """The run a saved configuration (``asdict`` of one, through JSON) describes,
-        checked in one line (:func:`~ledsim.loop.validation.run_from_dict`)."""
+    def from_dict(cls, saved: dict) -> RunSpec:
+        """The run a saved configuration describes (``asdict`` of one through JSON:
+        nested by parts, or flat as ledsim 0.2 saved it), checked in one line
+        (:func:`~ledsim.loop.validation.run_from_dict`)."""
         return run_from_dict(cls, saved)
 
-    world = _PartView(WorldPart)
-    task = _PartView(TaskPart)
-    estimation = _PartView(EstimatorPart)
-    execution = _PartView(ExecutionPart)
+    def flat(self) -> dict:
+        """Every flat name and its value (the results' and the sweep's columns)."""
+        return {name: getattr(getattr(self, part), name) for name, part in FLAT.items()}
 
     def validate(self) -> None:
         """Raise :class:`LedsimError` naming the first choice or value not allowed."""
@@ -297,3 +279,17 @@ class RunConfig:
     def world_config(self, distance: float | None = None) -> WorldConfig:
         """The MuJoCo world of the run (at ``distance`` [m] instead, when given)."""
         return self.world.world_config(distance)
+
+
+def _flat_reader(part: str, name: str) -> property:
+    def read(self):
+        return getattr(getattr(self, part), name)
+
+    return property(read, doc=f"``{part}.{name}`` (see :class:`{PARTS[part].__name__}`)")
+
+
+for _name, _part in FLAT.items():
+    setattr(RunSpec, _name, _flat_reader(_part, _name))
+
+#: The former name of :class:`RunSpec` (an alias: ``RunConfig(estimator="ekf")``).
+RunConfig = RunSpec

@@ -81,7 +81,7 @@ class Cell:
 
     def key(self, base: RunConfig) -> str:
         """Identifies the cell and every setting that changes its result."""
-        common = {k: v for k, v in asdict(base).items()
+        common = {k: v for k, v in base.flat().items()
                   if k not in ("seeds", "workers", "estimator", "disturbances", "distance",
                                "noise_scale")
                   and not (k in _LINK_DEFAULTS and v == _LINK_DEFAULTS[k])}

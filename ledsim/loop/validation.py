@@ -175,14 +175,23 @@ def check_world(config: WorldConfig) -> None:
 
 
 def run_from_dict(cls, saved: dict):
-    """The run of class ``cls`` (:class:`~ledsim.loop.run_config.RunConfig`) that a saved
-    configuration describes (``asdict`` of one, through JSON, so its tuples are lists; a
-    key it lacks keeps its default), checked: a key that is not a field, a value of
-    another type, or a run :func:`validate_run` refuses raises :class:`LedsimError`
-    naming it."""
+    """The run of class ``cls`` (:class:`~ledsim.loop.run_config.RunSpec`) that a saved
+    configuration describes (``asdict`` of one, through JSON, so its tuples are lists: by
+    parts, or flat; a key it lacks keeps its default), checked: a key that is not a
+    field, a value of another type, or a run :func:`validate_run` refuses raises
+    :class:`LedsimError` naming it."""
     if not isinstance(saved, dict):
         raise LedsimError(f"a run configuration is a JSON object, not {type(saved).__name__}")
-    hints = typing.get_type_hints(cls)
+    parts = typing.get_type_hints(cls)
+    if any(k in parts for k in saved):  # by parts: flatten, each part's keys its own
+        flat = {}
+        for part, values in saved.items():
+            if part not in parts or not isinstance(values, dict):
+                raise LedsimError(f"{part!r} in a run configuration by parts is not one "
+                                  f"of its parts ({', '.join(parts)}) with its keys")
+            flat.update(values)
+        saved = flat
+    hints = {k: v for kind in parts.values() for k, v in typing.get_type_hints(kind).items()}
     unknown = [k for k in saved if k not in hints]
     if unknown:
         raise LedsimError(f"unknown key {', '.join(map(repr, unknown))} in a run "
