@@ -63,3 +63,23 @@ def test_a_saved_spec_with_a_stray_part_is_refused_in_one_line():
         RunSpec.from_dict({"world": {}, "vehicle": {}})
     with pytest.raises(LedsimError, match="unknown key 'estimatr'"):
         RunSpec.from_dict({"estimatr": "ekf"})
+
+
+def test_the_env_takes_the_specs_names_and_its_old_positional_order():
+    import pickle
+
+    from ledsim.envs.link_align import POSITIONAL, SPEC_NAMES, LinkAlignEnv
+
+    assert set(SPEC_NAMES) >= {f.name for f in dataclasses.fields(WorldPart)}
+    env = LinkAlignEnv("align", 0.1, 2.0, ("vibration",), 0.04, imu=False)
+    assert (env.cfg.distance, env.cfg.noise_scale, env.cfg.disturbances,
+            env.cfg.torque_limit, env.cfg.imu) == (0.1, 2.0, ("vibration",), 0.04, False)
+    assert len(POSITIONAL) == 23
+    by_name = LinkAlignEnv(scenario="align", distance=0.1, noise_scale=2.0,
+                           disturbances="vibration", torque_limit=0.04, imu=False,
+                           imu_noise=("dvl_noise=0.01",))  # a world field the env lacked
+    assert by_name.cfg.imu_noise == ("dvl_noise=0.01",)
+    copy = pickle.loads(pickle.dumps(by_name))
+    assert copy.cfg == by_name.cfg
+    with pytest.raises(TypeError, match="unexpected keyword argument 'estimator'"):
+        LinkAlignEnv(estimator="ekf")

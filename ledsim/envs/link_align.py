@@ -52,7 +52,7 @@ incidence angle, at rest, whatever the scenario (``ledsim run --initial-angle``)
 from __future__ import annotations
 
 import math
-from dataclasses import replace
+from dataclasses import fields, replace
 
 import gymnasium as gym
 import numpy as np
@@ -77,6 +77,17 @@ VEHICLE_BOUND = np.array([60.0, 5.0, 5.0, math.pi, 100.0])
 
 
 
+#: The run's settings the env takes by name (``LinkAlignEnv(link="luma", depth=20)``):
+#: the world part's, and the task's and the estimation's that act on the env.
+SPEC_NAMES = (*(f.name for f in fields(WorldPart)), "disturbances", "acquisition", "imu")
+#: ledsim 0.2's positional order of the constructor, kept for positional callers.
+POSITIONAL = ("scenario", "distance", "noise_scale", "disturbances", "torque_limit",
+              "frame_skip", "phi0_range", "render_mode", "width", "height", "camera",
+              "integrator", "scene", "imu", "station_keeping", "acquisition", "link",
+              "water", "attenuation", "bit_rate", "depth", "transmitter_depth",
+              "receiver_dome")
+
+
 def initial_angle(value) -> float:
     """``options["initial_angle"]`` of :meth:`LinkAlignEnv.reset`, checked [rad]."""
     try:
@@ -95,79 +106,69 @@ class LinkAlignEnv(gym.Env, EzPickle):
         scenario: a scenario of ``ledsim run`` (``align``, ...): ``reset(seed=K)`` starts
             as seed K of ``ledsim run --scenario`` does. None: the initial misalignment
             is drawn uniformly in +-``phi0_range``, and the run's seed from ``seed``.
-        distance: link distance d [m].
-        noise_scale: multiplies the measurement-noise standard deviation [-].
-        disturbances: disturbance specs ``name[:key=value,...]`` (``ledsim run`` syntax).
-        torque_limit: motor torque at action 1 [N m].
         frame_skip: physics steps per action (the control period is frame_skip x 2 ms).
         phi0_range: initial misalignment drawn uniformly in +-phi0_range [rad].
         render_mode: None or ``"rgb_array"``.
         width, height, camera: rendered frame size [px] and camera name.
-        integrator: MuJoCo integrator (``implicitfast``, ``euler``, ...; see
-            docs/integrators.md).
-        scene: MJCF scene file (None: the shipped one).
-        imu: observe the vehicle's IMU, DVL and encoder (indices 2-6); the shipped
-            policy then uses them as ``ledsim run`` does.
-        station_keeping: the vehicle holds its pose on its thrusters.
-        acquisition: how the shipped policy acquires the link (``warm-up`` or
-            ``minimum-time``, as ``ledsim run --acquisition``); the env's own dynamics
-            do not depend on it.
-        link, water, attenuation, bit_rate: the physical link (``ledsim run --link``,
-            ``--water``, ``--attenuation`` [1/m], ``--bit-rate`` [bit/s]); ``paper``: the
-            paper's bench. ``distance`` is then in metres of water too.
-        depth, transmitter_depth: the receiver vehicle's and the LED's depth [m]
-            (``--depth``, ``--transmitter-depth``; None: the receiver's);
-            ``receiver_dome``: the head turns inside a dome (``--receiver-dome``).
+        **spec: the run's settings, by their names in ``ledsim run``'s spec
+            (:data:`SPEC_NAMES`): every field of
+            :class:`~ledsim.loop.run_config.WorldPart` (``distance``, ``link``,
+            ``torque_limit`` (the motor torque at action 1 [N m]), ``noise_scale``,
+            ``depth``, ...), the task's ``disturbances`` and ``acquisition`` (how the
+            shipped policy acquires the link; the env's own dynamics do not depend on
+            it), and the estimation's ``imu`` (observe the vehicle's IMU, DVL and
+            encoder, indices 2-6; the shipped policy then uses them as ``ledsim run``
+            does). Positional arguments keep ledsim 0.2's order (:data:`POSITIONAL`).
     """
 
     metadata = {"render_modes": ["rgb_array"], "render_fps": 100}
 
-    def __init__(self, scenario: str | None = None, distance: float = WorldPart.distance,
-                 noise_scale: float = WorldPart.noise_scale,
-                 disturbances: tuple[str, ...] = (),
-                 torque_limit: float = WorldPart.torque_limit, frame_skip: int = 5,
+    def __init__(self, scenario: str | None = None, *args, frame_skip: int = 5,
                  phi0_range: float = 0.3, render_mode: str | None = None, width: int = 640,
-                 height: int = 480, camera: str = "side",
-                 integrator: str = WorldPart.integrator, scene: str | None = None,
-                 imu: bool = EstimatorPart.imu,
-                 station_keeping: bool = WorldPart.station_keeping,
-                 acquisition: str = TaskPart.acquisition, link: str = WorldPart.link,
-                 water: str | None = WorldPart.water,
-                 attenuation: float | None = WorldPart.attenuation,
-                 bit_rate: float | None = WorldPart.bit_rate,
-                 depth: float = WorldPart.depth,
-                 transmitter_depth: float | None = WorldPart.transmitter_depth,
-                 receiver_dome: bool = WorldPart.receiver_dome):
+                 height: int = 480, camera: str = "side", **spec):
+        if args:  # ledsim 0.2's positional order (and its pickles)
+            named = dict(zip(POSITIONAL[1:], args, strict=False))
+            if len(args) > len(POSITIONAL) - 1 or set(named) & set(spec):
+                raise TypeError(f"LinkAlignEnv got {len(args)} positional arguments after "
+                                "scenario, or one also by name: name them")
+            own = {"frame_skip": frame_skip, "phi0_range": phi0_range,
+                   "render_mode": render_mode, "width": width, "height": height,
+                   "camera": camera}
+            own.update({k: named.pop(k) for k in list(named) if k in own})
+            frame_skip, phi0_range, render_mode, width, height, camera = own.values()
+            spec = {**named, **spec}
+        unknown = sorted(set(spec) - set(SPEC_NAMES))
+        if unknown:
+            raise TypeError(f"LinkAlignEnv got an unexpected keyword argument {unknown[0]!r}: "
+                            f"the run's settings it takes are {', '.join(SPEC_NAMES)}")
         # Pickles as its constructor arguments (MuJoCo's model does not pickle), as
         # Gymnasium's MuJoCo environments do: the copy is a new environment.
-        EzPickle.__init__(self, scenario, distance, noise_scale, disturbances, torque_limit,
-                          frame_skip, phi0_range, render_mode, width, height, camera,
-                          integrator, scene, imu, station_keeping, acquisition, link, water,
-                          attenuation, bit_rate, depth, transmitter_depth, receiver_dome)
+        EzPickle.__init__(self, scenario, frame_skip=frame_skip, phi0_range=phi0_range,
+                          render_mode=render_mode, width=width, height=height,
+                          camera=camera, **spec)
         if render_mode not in (None, "rgb_array"):
             raise ValueError(f"render_mode={render_mode!r}: use None or 'rgb_array'")
         if int(frame_skip) < 1:
             raise ValueError(f"frame_skip={frame_skip!r}: must be >= 1")
-        if isinstance(disturbances, str):
-            disturbances = (disturbances,)
-        self.cfg = RunConfig.of(
-            WorldPart(distance, torque_limit, noise_scale, scene, integrator,
-                      bool(station_keeping), link=link, water=water,
-                      attenuation=attenuation, bit_rate=bit_rate, depth=depth,
-                      transmitter_depth=transmitter_depth,
-                      receiver_dome=bool(receiver_dome)),
-            TaskPart(scenario=scenario or TaskPart.scenario, disturbances=tuple(disturbances),
-                     acquisition=acquisition),
-            # The env needs no estimator; its policy names its own (on a physical link
-            # the shipped KKL does not serve: docs/link.md).
-            EstimatorPart(imu=bool(imu),
-                          estimator=EstimatorPart.estimator if link == "paper" else "ekf"))
+        disturbances = spec.pop("disturbances", ())
+        spec["disturbances"] = (disturbances,) if isinstance(disturbances, str) \
+            else tuple(disturbances)
+        for flag in ("imu", "station_keeping", "receiver_dome"):
+            if flag in spec:
+                spec[flag] = bool(spec[flag])
+        link = spec.get("link", WorldPart.link)
+        # The env needs no estimator; its policy names its own (on a physical link the
+        # shipped KKL does not serve: docs/link.md).
+        self.cfg = RunConfig(scenario=scenario or TaskPart.scenario, **spec,
+                             estimator=EstimatorPart.estimator if link == "paper" else "ekf")
         self.cfg.validate()
+        distance, noise_scale = self.cfg.distance, self.cfg.noise_scale
+        torque_limit = self.cfg.torque_limit
         world_config = self.cfg.world_config()
         Te = world_config.timestep * int(frame_skip)
         if Te != world_config.constants.Te:
             world_config = replace(world_config, constants=link_constants(
-                link, distance, water, attenuation, LinkConstants(Te=Te)))
+                link, distance, self.cfg.water, self.cfg.attenuation, LinkConstants(Te=Te)))
         self.system = GimbalSystem(world_config)
         self.world = self.system.world
         self.model, self.data = self.world.model, self.world.data
