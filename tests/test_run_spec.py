@@ -83,3 +83,13 @@ def test_the_env_takes_the_specs_names_and_its_old_positional_order():
     assert copy.cfg == by_name.cfg
     with pytest.raises(TypeError, match="unexpected keyword argument 'estimator'"):
         LinkAlignEnv(estimator="ekf")
+
+
+def test_results_carry_the_spec_that_reruns_them(tmp_path):
+    from ledsim.loop.report import run_many
+
+    spec = RunSpec(estimator="ekf", seconds=0.3, seeds=1, workers=1, imu=False)
+    summary, _ = run_many(spec, progress=False)
+    saved = json.loads(json.dumps(summary.to_dict() if hasattr(summary, "to_dict")
+                                  else dataclasses.asdict(summary)))
+    assert RunSpec.from_dict(saved["spec"]) == spec

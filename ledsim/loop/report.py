@@ -74,7 +74,9 @@ class RunSummary(DictAccess):
     after the first acquisition, those that the data did not call for (the geometry
     allowed the link, no occluder shaded it, and the estimator's own phi was within 0.1
     rad of the truth), and the estimator's restarts, per seed
-    (:class:`~ledsim.loop.run_metrics.RunMetrics`)."""
+    (:class:`~ledsim.loop.run_metrics.RunMetrics`); ``spec`` the whole run by its flat
+    names (:meth:`~ledsim.loop.run_config.RunSpec.flat`), which
+    :meth:`~ledsim.loop.run_config.RunSpec.from_dict` reads back to rerun it."""
 
     scenario: str
     estimator: str
@@ -134,6 +136,7 @@ class RunSummary(DictAccess):
     loss_events: Stat | None = None
     false_loss_events: Stat | None = None
     reseeds: Stat | None = None
+    spec: dict | None = None
 
 
 #: The per-window metrics a summary gives over the seeds (:class:`WindowMetrics`).
@@ -204,7 +207,7 @@ def summarize(cfg: RunConfig, outs: list[RunOutcome]) -> RunSummary:
         receiver_dome=cfg.receiver_dome,
         loss_events=stat(lambda o: o.metrics.loss_events),
         false_loss_events=stat(lambda o: o.metrics.false_loss_events),
-        reseeds=stat(lambda o: o.metrics.reseeds))
+        reseeds=stat(lambda o: o.metrics.reseeds), spec=cfg.flat())
 
 
 #: The most seeds one job steps together (a batch): larger batches gain little more
