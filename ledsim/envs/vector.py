@@ -27,10 +27,8 @@ import numpy as np
 from gymnasium.vector import AutoresetMode, VectorEnv
 from gymnasium.vector.utils import batch_space
 
-from ledsim.agent.autopilot import Vehicle
 from ledsim.envs.link_align import LinkAlignEnv
-from ledsim.physics.sensor_rows import SensorRows
-from ledsim.physics.tick import PhysicsPass, step_worlds
+from ledsim.physics.world_rows import WorldRows
 
 #: The autoreset modes by name (the enum's values are spelt too: ``"NextStep"``).
 AUTORESET_MODES = {"next-step": AutoresetMode.NEXT_STEP,
@@ -87,11 +85,9 @@ class LinkAlignVectorEnv(VectorEnv):
         self.observation_space = batch_space(e0.observation_space, self.num_envs)
         self.action_space = batch_space(e0.action_space, self.num_envs)
         self.render_mode = None
-        self._physics = PhysicsPass([e.world for e in self.envs], threads)
+        self._rows = WorldRows([e.world for e in self.envs], threads)
         self._elapsed = np.zeros(self.num_envs, dtype=np.int64)
         self._ended = np.zeros(self.num_envs, dtype=bool)  # next-step: reset at this step
-        self._vehicles: Vehicle | None = None
-        self._sensors: SensorRows | None = None
 
     def reset(self, *, seed: int | list | None = None, options: dict | None = None):
         """Reset every sub-environment: ``seed`` S gives sub-environment i the seed
@@ -107,26 +103,25 @@ class LinkAlignVectorEnv(VectorEnv):
                                  f"({self.num_envs}), or one integer")
         firsts = [e.reset(seed=s, options=options) for e, s in zip(self.envs, seeds,
                                                                     strict=True)]
-        self._sensors = SensorRows([e.sensor for e in self.envs])  # read in one pass
         self._elapsed[:] = 0
         self._ended[:] = False
-        # The sub-environments' vehicles (each started as its own) as one, stepped in
-        # one pass; each sub-environment reads its row.
-        self._vehicles = None
-        if self.envs[0].vehicle is not None:
-            self._vehicles = Vehicle.stacked([e.vehicle for e in self.envs])
-            for i, e in enumerate(self.envs):
-                e.vehicle = self._vehicles.row(i)
+        # The sub-environments as rows that tick together: sensors read in one pass,
+        # vehicles (each started as its own) stepped as one; each reads its row.
+        vehicles = self._rows.start([e.sensor for e in self.envs],
+                                    [e.disturbances for e in self.envs],
+                                    [e.vehicle for e in self.envs])
+        for e, vehicle in zip(self.envs, vehicles, strict=True):
+            e.vehicle = vehicle
         return self._stack_obs([o for o, _ in firsts]), self._stack_info([i for _, i in firsts])
 
     def _reset_one(self, i: int):
         """Sub-environment ``i`` anew (its next episode), its vehicle back in its row."""
-        first = self.envs[i].reset()
-        self._sensors.sensors[i] = self.envs[i].sensor
+        e = self.envs[i]
+        first = e.reset()
         self._elapsed[i] = 0
-        if self._vehicles is not None:
-            self._vehicles.put(i, self.envs[i].vehicle)
-            self.envs[i].vehicle = self._vehicles.row(i)
+        vehicle = self._rows.put(i, e.sensor, e.disturbances, e.vehicle)
+        if vehicle is not None:
+            e.vehicle = vehicle
         return first
 
     def step(self, actions):
@@ -143,16 +138,13 @@ class LinkAlignVectorEnv(VectorEnv):
         for i in np.flatnonzero(stepping):
             envs[i].command(actions[i])
         # Every vehicle row steps (a resetting one is put back below).
-        step_worlds(self._physics, [(envs[i].world, envs[i].disturbances,
-                                     envs[i].k * envs[i].dt) for i in np.flatnonzero(stepping)],
-                    self._vehicles,
-                    None if self._vehicles is None else np.array([e.k * e.dt for e in envs]))
+        self._rows.tick(np.array([e.k * e.dt for e in envs]), stepping)
         obs, infos = [None] * n, [None] * n
         reward = np.zeros(n)
         truncated = np.zeros(n, dtype=bool)
         # Every world's sensor in one pass (a world about to reset reads its old sensor,
         # which the reset replaces with a fresh one).
-        readings = self._sensors.read()
+        readings = self._rows.read()
         for i in range(n):
             if stepping[i]:
                 obs[i], reward[i], _, _, infos[i] = envs[i].observe_step(readings[i])
@@ -189,6 +181,6 @@ class LinkAlignVectorEnv(VectorEnv):
         return out
 
     def close_extras(self, **kwargs) -> None:
-        self._physics.close()
+        self._rows.close()
         for e in self.envs:
             e.close()

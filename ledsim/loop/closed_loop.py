@@ -20,7 +20,6 @@ from collections.abc import Callable, Sequence
 import numpy as np
 from tqdm.auto import tqdm
 
-from ledsim.agent.autopilot import Vehicle
 from ledsim.agent.supervisor import LinkSupervisor
 from ledsim.experiment.montecarlo import report_progress
 from ledsim.loop.build import SeedRun, build_run
@@ -29,9 +28,8 @@ from ledsim.loop.outcome import Navigation, RunOutcome, RunRecord, Trace, achiev
 from ledsim.loop.run_config import RunConfig
 from ledsim.physics.gimbal_system import GimbalSystem
 from ledsim.physics.sensor import SensorReading
-from ledsim.physics.sensor_rows import SensorRows
 from ledsim.physics.simulation import SimulationResult
-from ledsim.physics.tick import PhysicsPass, step_worlds
+from ledsim.physics.world_rows import WorldRows
 
 #: Steps between two reports of a run's progress (montecarlo.report_progress).
 REPORT_EVERY = 50
@@ -143,12 +141,16 @@ class ClosedLoop:
         self.runs = [LoopRun(b, self.system, self.steps, cfg.imu, record)
                      for b in built.seeds]
         # The runs' vehicles as one (each started as its own): one pass steps them all.
-        self.vehicles = None
-        if self.runs[0].vehicle is not None:
-            self.vehicles = Vehicle.stacked([run.vehicle for run in self.runs])
-            for i, run in enumerate(self.runs):
-                run.vehicle = self.vehicles.row(i)
         self.threads = max(1, min(int(threads), len(self.runs)))
+        # The runs' worlds as rows that tick together; their vehicles as one (each
+        # started as its own): one pass steps them all.
+        self.rows = WorldRows([run.world for run in self.runs], self.threads)
+        rows = self.rows.start([run.sensor for run in self.runs],
+                               [run.disturbances for run in self.runs],
+                               [run.vehicle for run in self.runs])
+        for run, vehicle in zip(self.runs, rows, strict=True):
+            run.vehicle = vehicle
+        self.vehicles = self.rows.vehicles
         self.on_step = on_step
 
     def run(self, keep_trace: bool | Sequence[bool] = False,
@@ -161,21 +163,19 @@ class ClosedLoop:
         runs, n, Te = self.runs, len(self.runs), self.Te
         keep = [keep_trace] * n if isinstance(keep_trace, bool) else list(keep_trace)
         t0 = time.perf_counter()
-        # The tick of every world (physics.tick.advance in parts): torques commanded,
-        # then physics.tick.step_worlds.
-        sensors = SensorRows([run.sensor for run in runs])
-        with PhysicsPass([run.world for run in runs], self.threads) as physics:
+        # The tick of every world (physics.tick.advance in parts): each torque
+        # commanded, then the rows' physics, preparation and vehicles in one tick.
+        with self.rows as rows:
             for k in tqdm(range(self.steps), disable=not progress, desc="simulate",
                           leave=False, file=sys.stderr):
                 t = k * Te
-                for run, reading in zip(runs, sensors.read(), strict=True):
+                for run, reading in zip(runs, rows.read(), strict=True):
                     torque = run.control(k, t, reading)
                     if self.on_step is not None:
                         self.on_step(run, t)
                     run.applied[k] = run.world.set_torque(torque)
                 t_next = (k + 1) * Te
-                step_worlds(physics, [(run.world, run.disturbances, t_next) for run in runs],
-                            self.vehicles, t_next)
+                rows.tick(t_next)
                 if (k + 1) % REPORT_EVERY == 0:  # the share done, for run_jobs' bar
                     report_progress((k + 1) / self.steps)
         wall = time.perf_counter() - t0
