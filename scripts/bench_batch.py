@@ -48,7 +48,7 @@ def measure(quick: bool) -> dict:
     warnings.filterwarnings("ignore")
     out = {}
     from ledsim.loop.closed_loop import ClosedLoop
-    from ledsim.loop.run_config import RunConfig
+    from ledsim.loop.config import RunConfig  # the old path: both trees have it
 
     cfg = RunConfig(scenario="align", estimator="kkl", seconds=4.0 if quick else 10.0)
     loop = ClosedLoop(cfg, [0])
@@ -99,7 +99,7 @@ def batch_against_rollout(n: int, seconds: float, threads: int = 1,
     from mujoco import rollout
 
     from ledsim.loop.closed_loop import ClosedLoop
-    from ledsim.loop.run_config import RunConfig
+    from ledsim.loop.config import RunConfig  # the old path: both trees have it
 
     cfg = RunConfig(scenario="align", estimator=estimator, supervision=supervision,
                     seconds=seconds)
