@@ -67,7 +67,7 @@ from ledsim.loop.run_config import MAX_INITIAL_ANGLE, EstimatorPart, RunConfig, 
 from ledsim.physics.gimbal_system import GimbalSystem
 from ledsim.physics.sensor import SensorReading
 from ledsim.physics.tick import prepare
-from ledsim.radiometry.link_presets import link_constants
+from ledsim.radiometry.link_presets import link_constants, preset_named
 from ledsim.radiometry.optics import IMPOSSIBLE_SIGMAS, achievable_power, peak_power
 
 #: Bounds of the vehicle's readings in the observation (indices 2-6): gyro z [rad/s],
@@ -156,19 +156,20 @@ class LinkAlignEnv(gym.Env, EzPickle):
         for flag in ("imu", "station_keeping", "receiver_dome"):
             if flag in spec:
                 spec[flag] = bool(spec[flag])
-        link = spec.get("link", WorldPart.link)
+        fixed = preset_named(spec.get("link", WorldPart.link)).ships_fixed_kkls
         # The env needs no estimator; its policy names its own (on a physical link the
         # shipped KKL does not serve: docs/link.md).
         self.cfg = RunConfig(scenario=scenario or TaskPart.scenario, **spec,
-                             estimator=EstimatorPart.estimator if link == "paper" else "ekf")
+                             estimator=EstimatorPart.estimator if fixed else "ekf")
         self.cfg.validate()
         distance, noise_scale = self.cfg.distance, self.cfg.noise_scale
         torque_limit = self.cfg.torque_limit
         world_config = self.cfg.world_config()
         Te = world_config.timestep * int(frame_skip)
         if Te != world_config.constants.Te:
+            c = self.cfg
             world_config = replace(world_config, constants=link_constants(
-                link, distance, self.cfg.water, self.cfg.attenuation, LinkConstants(Te=Te)))
+                c.link, distance, c.water, c.attenuation, LinkConstants(Te=Te)))
         self.system = GimbalSystem(world_config)
         self.world = self.system.world
         self.model, self.data = self.world.model, self.world.data

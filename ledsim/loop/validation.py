@@ -32,7 +32,7 @@ from ledsim.loop.registry import (
 )
 from ledsim.physics.disturbances import check_sea, check_timing, parse_disturbance
 from ledsim.physics.scene import WorldConfig, WorldError, transmitter_rise
-from ledsim.radiometry.link_presets import LINK_PRESETS
+from ledsim.radiometry.link_presets import LINK_PRESETS, preset_named
 from ledsim.radiometry.water import WATER_TYPES
 
 
@@ -69,7 +69,8 @@ def validate_run(cfg) -> None:
     if cfg.water is not None and cfg.water not in WATER_TYPES:
         raise LedsimError(f"unknown water {cfg.water!r}: choose one of "
                           f"{', '.join(WATER_TYPES)}")
-    if cfg.link != "paper" and not cfg.checkpoint and (
+    preset = preset_named(cfg.link)
+    if not preset.ships_fixed_kkls and not cfg.checkpoint and (
             cfg.estimator in KKL_ON_BENCH and not cfg.supervision):
         alone = "" if cfg.supervision else " with --no-supervision"
         raise LedsimError(f"estimator {cfg.estimator!r}{alone} has no shipped observer for "
@@ -78,7 +79,7 @@ def validate_run(cfg) -> None:
                           "gain-scheduled one and the bank) run under supervision, which "
                           "maps the link onto the world they were trained in; or use ekf, "
                           "ukf, pf or oracle")
-    if cfg.link != "paper" and cfg.filter_distance == "nominal":
+    if not preset.nominal_filters and cfg.filter_distance == "nominal":
         raise LedsimError("--filter-distance nominal is not allowed with a physical --link: "
                           "it rescales the bench's noise (use configured)")
     if cfg.estimator == "kkl-scheduled" and not cfg.supervision and \
@@ -121,7 +122,7 @@ def validate_run(cfg) -> None:
     transmitter_rise(cfg.depth, cfg.transmitter_depth, cfg.distance,
                      ("--depth", "--transmitter-depth"))
     disturbances = [parse_disturbance(d) for d in cfg.disturbances]
-    if cfg.link == "paper":
+    if not preset.has_receiver_hardware:
         for d in disturbances:
             if getattr(d, "needs_receiver", False):
                 raise LedsimError(d.NO_RECEIVER)

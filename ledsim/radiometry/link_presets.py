@@ -70,6 +70,38 @@ class LinkPreset:
         (metres of sea: docs/sea.md); the bench keeps the published schedule."""
         return self.physical
 
+    @property
+    def kkl_measured_everywhere(self) -> bool:
+        """Whether the shipped KKL is measured across the link's whole range
+        (docs/link_table.md); on the bench, only between the distances
+        ``ledsim.loop.build.estimation.SERVED_DISTANCES``."""
+        return self.physical
+
+    @property
+    def trains_on_own_receiver(self) -> bool:
+        """Whether the shipped KKLs were trained in this link's own world (the bench),
+        rather than on the bench's geometry with this link's receiver
+        (:func:`kkl_reference_constants`)."""
+        return not self.physical
+
+    @property
+    def ships_fixed_kkls(self) -> bool:
+        """Whether a fixed-gain KKL of each distance is shipped (the bench's, run without
+        supervision); a physical link's KKLs run under the supervisor's gain tracker."""
+        return not self.physical
+
+    @property
+    def nominal_filters(self) -> bool:
+        """Whether ``--filter-distance nominal`` applies: the bench's noise rescaled to
+        its nominal distance (a physical link's noise depends on the signal)."""
+        return not self.physical
+
+    @property
+    def has_receiver_hardware(self) -> bool:
+        """Whether the link has a detector and optics that disturbances of the receiver
+        (sunlight, a saturating front end) act on."""
+        return self.physical
+
     def link(self, water: Water, depth: float = 10.0, surface_irradiance: float = 0.0
              ) -> RadiometricLink:
         """The physical link in ``water``."""

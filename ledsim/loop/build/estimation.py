@@ -51,7 +51,8 @@ def served(cfg: RunConfig) -> bool:
     for a KKL of the user's own checkpoint, and on a physical link, whose KKL is
     measured across its range in docs/link_table.md)."""
     lo, hi = SERVED_DISTANCES
-    return not uses_reference(cfg) or cfg.link != "paper" or lo <= cfg.distance <= hi
+    return (not uses_reference(cfg) or preset_named(cfg.link).kkl_measured_everywhere
+            or lo <= cfg.distance <= hi)
 
 
 def saturates(cfg: RunConfig) -> bool:
@@ -75,7 +76,7 @@ def reference_world(cfg: RunConfig) -> WorldConfig:
     # and the bench's level LED (the models know only the turning plane).
     ref = replace(cfg, water=None, attenuation=None, transmitter_depth=None).world_config(
         distance=REFERENCE_DISTANCE)
-    if cfg.link == "paper":
+    if preset_named(cfg.link).trains_on_own_receiver:
         return ref
     return replace(ref, constants=kkl_reference_constants())
 
