@@ -10,16 +10,6 @@ from ledsim.errors import LedsimError
 log = logging.getLogger("ledsim")
 
 
-def _vehicle(args) -> dict:
-    """The vehicle's part of a command line: IMU, station keeping (and its gains),
-    sensor noise."""
-    return {"imu": not args.no_imu, "station_keeping": not args.no_station_keeping,
-            "imu_noise": tuple(item for spec in args.imu_noise
-                               for item in spec.split(",") if item),
-            "station_keeping_gains": tuple(item for spec in args.station_keeping_gain
-                                           for item in spec.split(",") if item)}
-
-
 def _check_vehicle(cfg) -> None:
     """A user's scene without the vehicle's sensors: refused with the IMU on, and said
     once with ``--no-imu`` (the run then has no station keeping)."""

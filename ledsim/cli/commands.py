@@ -13,10 +13,11 @@ import time
 from pathlib import Path
 
 from ledsim.cli.budget_cmd import budget  # noqa: F401 (the budget command)
-from ledsim.cli.checks import _check_vehicle, _vehicle, _warn_saturated, _warn_unserved
+from ledsim.cli.checks import _check_vehicle, _warn_saturated, _warn_unserved
 from ledsim.cli.export_cmd import export  # noqa: F401 (the export command)
 from ledsim.cli.groups import resolved_distance
 from ledsim.cli.replay_cmd import replay  # noqa: F401 (the replay command)
+from ledsim.cli.spec_flags import VEHICLE, spec_values
 from ledsim.errors import LedsimError
 from ledsim.files.outputs import check_out_dir, check_out_file, output_folder, save_checkpoint
 
@@ -24,28 +25,14 @@ log = logging.getLogger("ledsim")
 
 
 def _loop_config(args, **given):
-    """The run of a command line: each part of the experiment from the flags it has (a
-    part's own default for the flags a command does not take), validated."""
-    from dataclasses import fields
+    """The run of a command line: the spec's names from the flags it has
+    (:func:`~ledsim.cli.spec_flags.spec_values`; a part's own default for the flags a
+    command does not take) and ``given``, validated."""
+    from ledsim.loop.run_config import RunSpec
 
-    from ledsim.loop.run_config import PARTS, RunConfig
-
-    values = {**vars(args), "disturbances": tuple(args.disturbance),
-              "supervision": not args.no_supervision, **_vehicle(args), **given}
-    parts = {name: kind(**{f.name: values[f.name] for f in fields(kind) if f.name in values})
-             for name, kind in PARTS.items()}
-    cfg = RunConfig.of(**parts)
+    cfg = RunSpec(**{**spec_values(args), **given})
     cfg.validate()
     return cfg
-
-
-def _link(args, distance: bool = True) -> dict:
-    """The run's link flags (``--link``, ``--water``, ``--attenuation``, ``--bit-rate``
-    and, with ``distance``, ``--distance``: None lets the run take the preset's)."""
-    keys = ("link", "water", "attenuation", "bit_rate", "depth", "transmitter_depth",
-            "receiver_dome") + (
-        ("distance",) if distance else ())
-    return {k: getattr(args, k) for k in keys if hasattr(args, k)}
 
 
 def simulate(args) -> int:
@@ -134,14 +121,14 @@ def demo(args) -> int:
     t0 = time.perf_counter()
     rows, summaries = [], []
     # Every estimator's run and the video are checked before the first one starts.
-    cfgs = [RunConfig(scenario="align", estimator=est, seeds=args.seeds, scene=args.scene,
-                      **_vehicle(args), **_link(args)) for est in COMPARED_ESTIMATORS]
+    cfgs = [RunConfig(scenario="align", estimator=est, **spec_values(args))
+            for est in COMPARED_ESTIMATORS]
     for cfg in cfgs:
         cfg.validate()
         check_checkpoint(cfg)
     _check_vehicle(cfgs[0])
     if not args.no_video:
-        check_video(_demo_video_config(args.scene, _vehicle(args)), VideoSpec())
+        check_video(_demo_video_config(args.scene, spec_values(args, VEHICLE)), VideoSpec())
     _warn_saturated(cfgs[0])
     with output_folder(out) as tmp:
         for est, cfg in zip(COMPARED_ESTIMATORS, cfgs, strict=True):
@@ -154,7 +141,7 @@ def demo(args) -> int:
         write_json(tmp / "results.json", summaries)
         if not args.no_video:
             # The video stays on the bench: the scene's cameras frame 8.5 cm, not metres.
-            _demo_video(tmp, args.scene, not args.quiet, _vehicle(args))
+            _demo_video(tmp, args.scene, not args.quiet, spec_values(args, VEHICLE))
     log.info(f"wrote {out}/table.md, results.json, <estimator>/run.png"
              f"{'' if args.no_video else ', alignment.mp4, alignment.png'} in "
           f"{time.perf_counter() - t0:.0f} s")
@@ -261,11 +248,9 @@ def sweep(args) -> int:
 
     if args.address is not None and args.backend != "ray":
         raise LedsimError("--address needs --backend ray")
-    base = RunConfig(scenario=args.scenario, torque_limit=args.torque_limit,
-                     particles=args.particles, seconds=args.seconds, scene=args.scene,
-                     supervision=not args.no_supervision, integrator=args.integrator,
-                     initial_angle=args.initial_angle, acquisition=args.acquisition,
-                     **_vehicle(args), **_link(args, distance=False))
+    # the grid's flags (repeatable), and the sweep's own seeds and workers, apart
+    base = RunConfig(**spec_values(args, exclude=(
+        "estimator", "disturbances", "distance", "noise_scale", "seeds", "workers")))
     base.validate()
     _check_vehicle(base)
     grid = SweepGrid(estimators=args.estimator or ["kkl"],

@@ -20,13 +20,11 @@ from ledsim.cli.options import (
     DISTANCE,
     DPHI_DEG,
     NOISE_SCALE,
-    SECONDS,
     SEED,
-    SEEDS,
-    TORQUE_LIMIT,
     WORKERS,
     number,
 )
+from ledsim.cli.spec_flags import add_spec_flags
 from ledsim.constants import PAPER_DISTANCE
 
 EXIT_USAGE = 2
@@ -69,10 +67,7 @@ def build_parser() -> argparse.ArgumentParser:
 
     p = _Parser(prog="ledsim", description="An underwater LED optical link in MuJoCo, kept "
                 "aligned by a learned KKL observer. User mistakes exit with code 2.")
-    from ledsim.loop.run_config import EstimatorPart as E
     from ledsim.loop.run_config import ExecutionPart as X
-    from ledsim.loop.run_config import TaskPart as T
-    from ledsim.loop.run_config import WorldPart as W
 
     p.add_argument("--version", action="version", version=f"ledsim {__version__}")
     sub = p.add_subparsers(dest="command", required=True, parser_class=_Parser)
@@ -153,18 +148,14 @@ def build_parser() -> argparse.ArgumentParser:
                     help="also write SNR and BER against distance to FILE (.png)")
 
     sim = command("simulate", "run the MuJoCo world headless; save series + plot")
-    sim.add_argument("--seconds", type=SECONDS, default=5.0, help="duration [s]")
+    add_spec_flags(sim, "seconds", seconds={"default": 5.0, "help": "duration [s]"})
     sim.add_argument("--torque-profile", default="zero", **choices(TORQUE_PROFILES),
                      help="gimbal torque")
     sim.add_argument("--torque-amplitude", type=number(-10.0, 10.0, "N m"), default=0.002,
                      help="[N m]")
     sim.add_argument("--torque-frequency", type=number(0.0, 50.0, "Hz", lo_open=True),
                      default=0.5, help="[Hz]")
-    from ledsim.physics.disturbances import DISTURBANCES
-
-    sim.add_argument("--disturbance", action="append", default=[], metavar="SPEC",
-                     help="name[:key=value,...] with name in " + ", ".join(DISTURBANCES)
-                     + " (repeatable)")
+    add_spec_flags(sim, "disturbances")
     add_world_args(sim)
     sim.add_argument("--dphi-deg", "--dphi", dest="dphi", type=DPHI_DEG, default=6.0,
                      help="angle between the photodiode normals [deg]")
@@ -173,8 +164,7 @@ def build_parser() -> argparse.ArgumentParser:
                      help="LED axis turned away from the receiver [deg]")
     sim.add_argument("--led-offset", type=number(-1.0, 1.0, "m"), default=0.0,
                      help="LED moved across the link [m]")
-    sim.add_argument("--torque-limit", type=TORQUE_LIMIT, default=W.torque_limit,
-                     help="[N m]")
+    add_spec_flags(sim, "torque_limit")
     sim.add_argument("--gimbal-angle", type=number(-math.pi, math.pi, "rad"), default=0.0,
                      help="initial angle [rad]")
     sim.add_argument("--seed", type=SEED, default=0, help="measurement-noise seed")
@@ -184,33 +174,20 @@ def build_parser() -> argparse.ArgumentParser:
     add_loop_args(rn)
     add_run_knobs(rn)
     add_start_arg(rn)
-    rn.add_argument("--noise-scale", type=NOISE_SCALE, default=W.noise_scale,
-                    help="multiplies the measurement-noise std")
-    rn.add_argument("--seeds", type=SEEDS, default=X.seeds,
-                    help="Monte-Carlo runs (seeds 0..N-1)")
-    rn.add_argument("--checkpoint", help="KKL checkpoint trained on the MuJoCo world")
-    rn.add_argument("--omega-model", default=E.omega_model,
-                    **choices(("identified", "simulator", "none")),
-                    help="f used by the KKL's Omega correction")
-    rn.add_argument("--workers", type=WORKERS, default=X.workers, help="processes")
+    add_spec_flags(rn, "noise_scale", "seeds", "checkpoint", "omega_model", "workers")
     rn.add_argument("--no-plot", action="store_true", help="skip run.png")
     rn.add_argument("--save-trace", action="store_true",
                     help="also write trace_seed<K>.npz per seed: t, phi, phidot, phi_hat, "
                          "phidot_hat, p1, p2, torque, lost (SI units, one row per step) "
                          "and what the estimator was given, for ledsim replay")
-    rn.add_argument("--window", type=number(0.0, 86_400.0, "s", lo_open=True), default=None,
-                    help="also report the metrics of each window of this length [s], at "
-                    "most the run's, in "
-                    "results.json (windows: availability, FEC share, the hull's and the "
-                    "navigation's horizontal error), e.g. 60 for a long run minute by "
-                    "minute")
+    add_spec_flags(rn, "window")
     rn.add_argument("--out", required=True, help="output folder")
 
     rd = command("render", "render a closed-loop run to an H.264 mp4 (headless)")
     add_loop_args(rd)
     add_start_arg(rd)
-    rd.add_argument("--seconds", type=number(0.0, 600.0, "s", lo_open=True), default=6.0,
-                    help="[s]")
+    add_spec_flags(rd, "seconds", seconds={"type": number(0.0, 600.0, "s", lo_open=True),
+                                           "default": 6.0, "help": "[s]"})
     rd.add_argument("--width", type=number(-10_000, 10_000, integer=True), default=640,
                     help="[px]")
     rd.add_argument("--height", type=number(-10_000, 10_000, integer=True), default=480,
@@ -226,7 +203,7 @@ def build_parser() -> argparse.ArgumentParser:
 
     sw = command("sweep", "a grid of closed-loop runs (estimators x disturbances x "
                  "distances x noise scales x seeds), locally or on a Ray cluster")
-    from ledsim.loop.run_config import LOOP_ESTIMATORS, PHYSICS_SCENARIOS
+    from ledsim.loop.run_config import LOOP_ESTIMATORS
     from ledsim.loop.sweep import BACKENDS
     sw.add_argument("--estimator", action="append", choices=list(LOOP_ESTIMATORS),
                     metavar="{" + ",".join(LOOP_ESTIMATORS) + "}",
@@ -238,13 +215,12 @@ def build_parser() -> argparse.ArgumentParser:
                     help="link distance d [m] (repeatable; default: 0.085)")
     sw.add_argument("--noise-scale", action="append", type=NOISE_SCALE,
                     help="multiplies the measurement-noise std (repeatable; default: 1)")
-    sw.add_argument("--seeds", type=SEEDS, default=2, help="runs per combination")
-    sw.add_argument("--scenario", default=T.scenario, **choices(PHYSICS_SCENARIOS),
-                    help="closed-loop scenario")
+    add_spec_flags(sw, "seeds", "scenario", seeds={"default": 2,
+                                                  "help": "runs per combination"})
     add_run_knobs(sw)
     add_start_arg(sw)
-    sw.add_argument("--no-supervision", action="store_true",
-                    help="no loss detection or reacquisition (see ledsim run)")
+    add_spec_flags(sw, "supervision", supervision={
+        "help": "no loss detection or reacquisition (see ledsim run)"})
     add_vehicle_args(sw)
     add_link_args(sw)
     add_scene_args(sw)
@@ -253,19 +229,19 @@ def build_parser() -> argparse.ArgumentParser:
     sw.add_argument("--address", default=None,
                     help="Ray cluster to join (e.g. auto, or ray://HEAD:10001); default: "
                     "start a local Ray instance of --workers CPUs")
-    sw.add_argument("--workers", type=WORKERS, default=X.workers,
-                    help="processes (local) or CPUs of a local Ray instance")
+    add_spec_flags(sw, "workers", workers={
+        "help": "processes (local) or CPUs of a local Ray instance"})
     sw.add_argument("--no-plot", action="store_true", help="skip summary.png")
     sw.add_argument("--out", required=True, help="output folder; rerun to resume")
 
     dm = command("demo", "main job: closed-loop alignment with every estimator")
-    dm.add_argument("--seeds", type=number(1, 1000, integer=True), default=2,
-                    help="Monte-Carlo runs per estimator")
+    add_spec_flags(dm, "seeds", seeds={"type": number(1, 1000, integer=True), "default": 2,
+                                       "help": "Monte-Carlo runs per estimator"})
     dm.add_argument("--out", default="out/demo", help="output folder")
-    dm.add_argument("--scene", help="MJCF scene file (default: the shipped led_link.xml)")
+    add_spec_flags(dm, "scene")
     dm.add_argument("--no-video", action="store_true", help="skip the rendered video")
-    dm.add_argument("--distance", type=DISTANCE, default=None,
-                    help="link distance d [m] (default: the --link preset's)")
+    add_spec_flags(dm, "distance", distance={
+        "help": "link distance d [m] (default: the --link preset's)"})
     add_link_args(dm)
     add_vehicle_args(dm)
     return p

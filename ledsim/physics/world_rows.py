@@ -74,11 +74,14 @@ class WorldRows:
         if self._physics is None:
             self._physics = PhysicsPass(self.worlds, self.threads)
         n = len(self.worlds)
-        times = np.broadcast_to(np.asarray(t_next, dtype=float), (n,))
         rows = range(n) if stepping is None else np.flatnonzero(stepping)
-        step_worlds(self._physics,
-                    [(self.worlds[i], self.disturbances[i], float(times[i])) for i in rows],
-                    self.vehicles, t_next)
+        if np.ndim(t_next) == 0:  # one time (the closed loop): no array per step
+            t = float(t_next)
+            ticks = [(self.worlds[i], self.disturbances[i], t) for i in rows]
+        else:
+            times = np.asarray(t_next, dtype=float)
+            ticks = [(self.worlds[i], self.disturbances[i], float(times[i])) for i in rows]
+        step_worlds(self._physics, ticks, self.vehicles, t_next)
 
     def close(self) -> None:
         """Stop the physics' threads (a later tick starts them again)."""
