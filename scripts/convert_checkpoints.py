@@ -16,7 +16,7 @@ import sys
 from pathlib import Path
 
 from ledsim.files.outputs import atomic_write_bytes
-from observer.kkl import checkpoint
+from observer.kkl import checkpoint, checkpoint_io
 
 SHIPPED = Path(__file__).resolve().parent.parent / "ledsim" / "assets" / "checkpoints"
 
@@ -49,7 +49,7 @@ def main() -> int:
         return 0
     for src in paths:
         try:
-            dst = checkpoint.convert(src, write_bytes=_write)
+            dst = checkpoint_io.convert(src, write_bytes=_write)
             diff = same(checkpoint.read(src), checkpoint.read(dst))
         except checkpoint.CheckpointError as exc:
             print(f"convert_checkpoints: error: {exc}", file=sys.stderr)

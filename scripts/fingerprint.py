@@ -24,7 +24,8 @@ import numpy as np
 
 from ledsim.files.results import to_jsonable
 from ledsim.loop.closed_loop import run_once
-from ledsim.loop.run_config import LOOP_ESTIMATORS, RunConfig
+from ledsim.loop.registry import LOOP_ESTIMATORS
+from ledsim.loop.run_config import RunConfig
 
 KINDS = ("vibration:frequency=3,torque=0.5,force=2", "current:speed=0.3,gust=0.05",
          "waves:height=1,period=6", "transmitter:sway=0.005,yaw=0.1",

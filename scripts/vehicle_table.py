@@ -24,8 +24,9 @@ from pathlib import Path
 
 from ledsim.files.outputs import atomic_write_text
 from ledsim.files.results import to_jsonable, write_json
+from ledsim.loop.registry import COMPARED_ESTIMATORS
 from ledsim.loop.report import run_many
-from ledsim.loop.run_config import COMPARED_ESTIMATORS, RunConfig
+from ledsim.loop.run_config import RunConfig
 from ledsim.loop.table import TABLE_HEADER, format_summary
 
 ROOT = Path(__file__).resolve().parent.parent

@@ -16,7 +16,7 @@ import numpy as np
 import pytest
 
 from ledsim.files.resources import checkpoint_dir, shipped_checkpoint
-from observer.kkl import checkpoint
+from observer.kkl import checkpoint, checkpoint_io
 
 #: sha256 (its first 128 bits) of each shipped checkpoint's format, metadata and arrays
 #: (:func:`_digest`), taken from its .pt file by ``torch.load(..., weights_only=True)``
@@ -103,7 +103,7 @@ def test_a_pt_of_ledsim_0_2_loads_through_torch_and_converts(tiny_observer, syst
     x = np.array([[0.1, 0.02], [-0.2, 0.1]])
     np.testing.assert_array_equal(checkpoint.load(old, system).encode(x),
                                   tiny_observer.encode(x))
-    new = checkpoint.convert(old)
+    new = checkpoint_io.convert(old)
     assert new == tmp_path / "old.safetensors" and old.is_file()
     assert _digest(checkpoint.read(new)) == _digest(checkpoint.read(old))
     r = subprocess.run([sys.executable, "scripts/convert_checkpoints.py", str(old)],

@@ -6,7 +6,8 @@ import pytest
 
 from ledsim.experiment.estimators import ESTIMATORS, build_estimator
 from ledsim.loop.closed_loop import run_once
-from ledsim.loop.run_config import LOOP_ESTIMATORS, RunConfig
+from ledsim.loop.registry import LOOP_ESTIMATORS
+from ledsim.loop.run_config import RunConfig
 from ledsim.paper.evaluate import default_checkpoint
 from ledsim.paper.scenarios import Noise, get_scenario, run
 from ledsim.physics.disturbances import DISTURBANCES

@@ -68,7 +68,8 @@ def test_a_saved_spec_with_a_stray_part_is_refused_in_one_line():
 def test_the_env_takes_the_specs_names_and_its_old_positional_order():
     import pickle
 
-    from ledsim.envs.link_align import POSITIONAL, SPEC_NAMES, LinkAlignEnv
+    from ledsim.envs.arguments import POSITIONAL, SPEC_NAMES
+    from ledsim.envs.link_align import LinkAlignEnv
 
     assert set(SPEC_NAMES) >= {f.name for f in dataclasses.fields(WorldPart)}
     env = LinkAlignEnv("align", 0.1, 2.0, ("vibration",), 0.04, imu=False)

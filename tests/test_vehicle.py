@@ -12,9 +12,10 @@ from ledsim.constants import LinkConstants
 from ledsim.errors import LedsimError
 from ledsim.loop.closed_loop import run_batch, run_once
 from ledsim.loop.report import summarize
-from ledsim.loop.run_config import RunConfig, navigation_noise
+from ledsim.loop.run_config import RunConfig
 from ledsim.loop.run_metrics import run_metrics
 from ledsim.loop.table import recovered
+from ledsim.loop.validation import navigation_noise
 from ledsim.physics.disturbances import DisturbanceError, parse_disturbance
 
 

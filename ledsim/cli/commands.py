@@ -112,8 +112,9 @@ def demo(args) -> int:
     from ledsim.files.outputs import atomic_write_text
     from ledsim.files.results import write_json
     from ledsim.loop.build.estimation import check_checkpoint
+    from ledsim.loop.registry import COMPARED_ESTIMATORS
     from ledsim.loop.report import run_many, write_run
-    from ledsim.loop.run_config import COMPARED_ESTIMATORS, RunConfig
+    from ledsim.loop.run_config import RunConfig
     from ledsim.loop.table import TABLE_HEADER, format_summary
     from ledsim.loop.video import VideoSpec, check_video
 

@@ -203,7 +203,7 @@ def build_parser() -> argparse.ArgumentParser:
 
     sw = command("sweep", "a grid of closed-loop runs (estimators x disturbances x "
                  "distances x noise scales x seeds), locally or on a Ray cluster")
-    from ledsim.loop.run_config import LOOP_ESTIMATORS
+    from ledsim.loop.registry import LOOP_ESTIMATORS
     from ledsim.loop.sweep import BACKENDS
     sw.add_argument("--estimator", action="append", choices=list(LOOP_ESTIMATORS),
                     metavar="{" + ",".join(LOOP_ESTIMATORS) + "}",

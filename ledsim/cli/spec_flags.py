@@ -67,7 +67,7 @@ def flags() -> dict[str, Flag]:
         WORKERS,
         number,
     )
-    from ledsim.loop.run_config import (
+    from ledsim.loop.registry import (
         ACQUISITIONS,
         LOOP_ESTIMATORS,
         MAX_INITIAL_ANGLE,

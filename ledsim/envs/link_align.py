@@ -52,7 +52,7 @@ incidence angle, at rest, whatever the scenario (``ledsim run --initial-angle``)
 from __future__ import annotations
 
 import math
-from dataclasses import fields, replace
+from dataclasses import replace
 
 import gymnasium as gym
 import numpy as np
@@ -61,9 +61,10 @@ from gymnasium.utils import EzPickle
 
 from ledsim.agent.laws import receiver_peak
 from ledsim.constants import MIN_DISTANCE, LinkConstants
+from ledsim.envs.arguments import constructor_arguments, initial_angle
 from ledsim.loop.build.estimation import run_noise
 from ledsim.loop.build.start import start_world
-from ledsim.loop.run_config import MAX_INITIAL_ANGLE, EstimatorPart, RunConfig, TaskPart, WorldPart
+from ledsim.loop.run_config import EstimatorPart, RunConfig, TaskPart, WorldPart
 from ledsim.physics.gimbal_system import GimbalSystem
 from ledsim.physics.sensor import SensorReading
 from ledsim.physics.tick import prepare
@@ -76,28 +77,6 @@ VEHICLE_BOUND = np.array([60.0, 5.0, 5.0, math.pi, 100.0])
 
 
 
-
-#: The run's settings the env takes by name (``LinkAlignEnv(link="luma", depth=20)``):
-#: the world part's, and the task's and the estimation's that act on the env.
-SPEC_NAMES = (*(f.name for f in fields(WorldPart)), "disturbances", "acquisition", "imu")
-#: ledsim 0.2's positional order of the constructor, kept for positional callers.
-POSITIONAL = ("scenario", "distance", "noise_scale", "disturbances", "torque_limit",
-              "frame_skip", "phi0_range", "render_mode", "width", "height", "camera",
-              "integrator", "scene", "imu", "station_keeping", "acquisition", "link",
-              "water", "attenuation", "bit_rate", "depth", "transmitter_depth",
-              "receiver_dome")
-
-
-def initial_angle(value) -> float:
-    """``options["initial_angle"]`` of :meth:`LinkAlignEnv.reset`, checked [rad]."""
-    try:
-        a = float(value)
-    except (TypeError, ValueError):
-        raise ValueError(f"initial_angle {value!r} is not allowed: a number of rad") from None
-    if not (math.isfinite(a) and abs(a) <= MAX_INITIAL_ANGLE):
-        raise ValueError(f"initial_angle {value!r} is not allowed: must be in "
-                         f"[-{MAX_INITIAL_ANGLE:g}, {MAX_INITIAL_ANGLE:g}] rad")
-    return a
 
 class LinkAlignEnv(gym.Env, EzPickle):
     """Keep the receiver aligned on the LED beam (see the module docstring).
@@ -126,21 +105,10 @@ class LinkAlignEnv(gym.Env, EzPickle):
     def __init__(self, scenario: str | None = None, *args, frame_skip: int = 5,
                  phi0_range: float = 0.3, render_mode: str | None = None, width: int = 640,
                  height: int = 480, camera: str = "side", **spec):
-        if args:  # ledsim 0.2's positional order (and its pickles)
-            named = dict(zip(POSITIONAL[1:], args, strict=False))
-            if len(args) > len(POSITIONAL) - 1 or set(named) & set(spec):
-                raise TypeError(f"LinkAlignEnv got {len(args)} positional arguments after "
-                                "scenario, or one also by name: name them")
-            own = {"frame_skip": frame_skip, "phi0_range": phi0_range,
-                   "render_mode": render_mode, "width": width, "height": height,
-                   "camera": camera}
-            own.update({k: named.pop(k) for k in list(named) if k in own})
-            frame_skip, phi0_range, render_mode, width, height, camera = own.values()
-            spec = {**named, **spec}
-        unknown = sorted(set(spec) - set(SPEC_NAMES))
-        if unknown:
-            raise TypeError(f"LinkAlignEnv got an unexpected keyword argument {unknown[0]!r}: "
-                            f"the run's settings it takes are {', '.join(SPEC_NAMES)}")
+        own = {"frame_skip": frame_skip, "phi0_range": phi0_range, "render_mode": render_mode,
+               "width": width, "height": height, "camera": camera}
+        own, spec = constructor_arguments(args, own, spec)
+        frame_skip, phi0_range, render_mode, width, height, camera = own.values()
         # Pickles as its constructor arguments (MuJoCo's model does not pickle), as
         # Gymnasium's MuJoCo environments do: the copy is a new environment.
         EzPickle.__init__(self, scenario, frame_skip=frame_skip, phi0_range=phi0_range,

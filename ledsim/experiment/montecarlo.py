@@ -23,7 +23,7 @@ from typing import TypeVar
 from tqdm.auto import tqdm
 
 from ledsim.errors import LedsimError
-from ledsim.experiment.workers import RemoteTraceback, WorkerDied, Workers  # noqa: F401 (re-exported)
+from ledsim.experiment.workers import Workers
 from ledsim.files.outputs import check_interrupt
 
 #: One BLAS/OpenMP thread per process, so that N workers use N cores. Effective only

@@ -24,7 +24,7 @@ from ledsim.agent.supervisor import LinkSupervisor
 from ledsim.experiment.montecarlo import report_progress
 from ledsim.loop.build import SeedRun, build_run
 from ledsim.loop.given import GivenRecord
-from ledsim.loop.outcome import Navigation, RunOutcome, RunRecord, Trace, achievable_power, outcome  # noqa: F401
+from ledsim.loop.outcome import Navigation, RunOutcome, RunRecord, outcome
 from ledsim.loop.run_config import RunConfig
 from ledsim.physics.gimbal_system import GimbalSystem
 from ledsim.physics.sensor import SensorReading

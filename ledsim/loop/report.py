@@ -14,7 +14,8 @@ from ledsim.experiment.montecarlo import run_jobs
 from ledsim.files.outputs import atomic_write_bytes
 from ledsim.files.results import DictAccess, write_json
 from ledsim.loop.build.estimation import check_checkpoint, saturates, served
-from ledsim.loop.closed_loop import RunOutcome, Trace, run_batch
+from ledsim.loop.closed_loop import run_batch
+from ledsim.loop.outcome import RunOutcome, Trace
 from ledsim.loop.pcrb_runs import bound_summary
 from ledsim.loop.run_config import RunConfig
 from observer.metrics import mean_and_spread

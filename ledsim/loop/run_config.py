@@ -8,18 +8,12 @@ from dataclasses import dataclass, fields, replace
 from ledsim.agent.autopilot import StationKeeping
 from ledsim.constants import NavigationNoise
 from ledsim.experiment.scenario import Scenario
-from ledsim.loop.registry import (  # noqa: F401 (re-exported)
-    ACQUISITIONS,
-    COMPARED_ESTIMATORS,
-    FILTER_DISTANCES,
-    LOOP_ESTIMATORS,
-    MAX_INITIAL_ANGLE,
+from ledsim.loop.registry import (
     MIN_FAST_PEAK_SNR,
-    OMEGA_MODELS,
     PHYSICS_SCENARIOS,
     peak_snr,
 )
-from ledsim.loop.validation import (  # noqa: F401
+from ledsim.loop.validation import (
     keeping_gains,
     navigation_noise,
     run_from_dict,

@@ -9,7 +9,7 @@ import math
 import mujoco
 import numpy as np
 
-from ledsim.physics.scene import VehicleMotion
+from ledsim.physics.scene_ids import VehicleMotion
 
 
 class HullAccess:

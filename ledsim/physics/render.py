@@ -27,7 +27,7 @@ import numpy as np
 
 from ledsim.errors import LedsimError
 from ledsim.files.outputs import INTERRUPTED, umask
-from ledsim.physics.overlay import STATUS_BADGES, Overlay  # noqa: F401 (re-exported)
+from ledsim.physics.overlay import Overlay
 from ledsim.physics.sea_render import add_beam_cone, add_surface
 from ledsim.physics.sensor import SensorReading
 from ledsim.physics.world import LinkWorld

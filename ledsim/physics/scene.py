@@ -19,13 +19,6 @@ from ledsim.constants import MIN_DISTANCE, ConfigError, LinkConstants
 from ledsim.errors import LedsimError, check_ranges
 from ledsim.files.resources import scene_path
 from ledsim.physics.head import build_head, receiver_centre
-from ledsim.physics.scene_ids import (  # noqa: F401 (re-exported)
-    MAGNETOMETER,
-    THRUSTERS,
-    VEHICLE_SENSORS,
-    SceneIds,
-    VehicleMotion,
-)
 from ledsim.physics.sea_scene import apply_sea
 
 #: Former module-level name of the default scene.

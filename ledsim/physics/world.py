@@ -40,7 +40,8 @@ import numpy as np
 
 from ledsim.physics.gimbal import GimbalAccess
 from ledsim.physics.hull import HullAccess
-from ledsim.physics.scene import SCENE, SceneIds, WorldConfig, WorldError, build_spec, set_buoyancy
+from ledsim.physics.scene import SCENE, WorldConfig, WorldError, build_spec, set_buoyancy
+from ledsim.physics.scene_ids import SceneIds
 
 __all__ = ["LinkWorld", "WorldConfig", "WorldError", "SCENE"]
 

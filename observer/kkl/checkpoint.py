@@ -19,12 +19,10 @@ from pathlib import Path
 import numpy as np
 
 from observer.kkl import scheduled_checkpoint
-from observer.kkl.checkpoint_io import (  # noqa: F401 (re-exported)
+from observer.kkl.checkpoint_io import (
     FORMAT,
-    SUFFIX,
     CheckpointError,
     Stored,
-    convert,
     corrupt,
     read,
     replace_file,
