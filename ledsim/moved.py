@@ -13,6 +13,7 @@ MOVED: dict[str, str] = {
     "ledsim.layout": "ledsim.physics.layout",
     "ledsim.linkbudget": "ledsim.radiometry.data_channel",
     "ledsim.loop.acquisition": "ledsim.agent.acquisition",
+    "ledsim.loop.batched": "ledsim.loop.closed_loop",
     "ledsim.loop.beamfix": "ledsim.agent.beamfix",
     "ledsim.loop.bound": "ledsim.loop.pcrb_runs",
     "ledsim.loop.config": "ledsim.loop.run_config",

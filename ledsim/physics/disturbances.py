@@ -28,7 +28,10 @@ from dataclasses import dataclass, fields
 import numpy as np
 
 from ledsim.keyvalues import parse_key_values
-from ledsim.physics.disturbance_base import Disturbance, DisturbanceError  # noqa: F401 (re-exported)
+from ledsim.physics.disturbance_base import (  # noqa: F401 (aliases: the parser's error)
+    Disturbance,
+    DisturbanceError,
+)
 from ledsim.physics.flow import WaterCurrent, Waves
 from ledsim.physics.light import Scintillation, SunlightFlicker
 from ledsim.physics.world import LinkWorld
