@@ -138,7 +138,8 @@ class ClosedLoop:
         built = build_run(cfg, seeds, record)
         self.system, self.model, self.steps = built.system, built.model, built.steps
         self.Te = self.system.Te
-        self.runs = [LoopRun(b, self.system, self.steps, cfg.imu, record)
+        self.built = built
+        self.runs = [LoopRun(b, self.system, self.steps, built.aided, record)
                      for b in built.seeds]
         # The runs' vehicles as one (each started as its own): one pass steps them all.
         self.threads = max(1, min(int(threads), len(self.runs)))
@@ -187,10 +188,11 @@ class ClosedLoop:
                     Navigation(run.hull, run.station, run.navigated),
                     run.vehicle is not None and run.vehicle.station_keeping,
                     None if run.given is None else
-                    run.given.series(run.step.estimator, self.cfg, run.u, run.measured),
+                    run.given.series(run.step.estimator, self.built.header,
+                                     self.system.constants.layout, run.u, run.measured),
                     run.noise, (self.model, run.u, run.measured), run.outside, run.medium,
                     run.own, run.reseeded, run.xhat_std),
-                    self.cfg, self.system.constants, wall / n, keep[i], window)
+                    self.built.judging, self.system.constants, wall / n, keep[i], window)
                 for i, run in enumerate(runs)]
 
 

@@ -32,16 +32,16 @@ class GivenRecord:
         self.reseeded[k] = step.decision.reseeded
         self.gain[k] = step.supervisor.gain_ratio
 
-    def series(self, estimator, cfg, u: np.ndarray, measured: np.ndarray
+    def series(self, estimator, header: dict, layout, u: np.ndarray, measured: np.ndarray
                ) -> dict[str, np.ndarray]:
         """The trace's series of what was given: the per-step ones (with the input ``u``
         [rad/s^2] and the samples the gate passed, ``measured``, that the run keeps for
-        every run), the estimator's calls (when it recorded them: not the oracle's) and
-        ``config``, the run's configuration as JSON."""
-        out = {**cfg.world_config().constants.layout.power_columns(~measured,
-                                                                    prefix="withheld_"),
+        every run; ``layout``: the receiver's), the estimator's calls (when it recorded
+        them: not the oracle's) and ``config``, the run's spec by its flat names
+        (``header``) as JSON."""
+        out = {**layout.power_columns(~measured, prefix="withheld_"),
                "u": u, "u_hull": self.u_hull, "reseeded": self.reseeded,
-               "gain": self.gain, "config": np.array(json.dumps(cfg.flat()))}
+               "gain": self.gain, "config": np.array(json.dumps(header))}
         if isinstance(estimator, RecordingEstimator):
             out.update(estimator.record.arrays())
         return out

@@ -11,12 +11,10 @@ from ledsim.agent.laws import receiver_peak
 from ledsim.constants import LinkConstants
 from ledsim.files.results import DictAccess
 from ledsim.loop.pcrb_runs import run_terms
-from ledsim.loop.run_config import RunConfig
 from ledsim.loop.run_metrics import RunMetrics, availability_mask, run_metrics, step_flags
 from ledsim.loop.windows import WindowMetrics, horizontal_rms, window_metrics
 from ledsim.physics.layout import ReceiverLayout
 from ledsim.radiometry import optics
-from ledsim.radiometry.data_channel import BIT_RATE
 from observer.pcrb import BoundError
 
 
@@ -152,11 +150,22 @@ class RunRecord:
     xhat_std: np.ndarray | None = None
 
 
-def outcome(record: RunRecord, cfg: RunConfig, constants, wall: float, keep_trace: bool,
+class Judging(NamedTuple):
+    """What a run is judged by, beyond its record: the measurement noise's scale [-],
+    the data's bit rate [bit/s], the warm-up [s] and the start of the steady window
+    [s] (the builder takes them from the run's spec)."""
+
+    noise_scale: float
+    bit_rate: float
+    warmup: float
+    steady_from: float
+
+
+def outcome(record: RunRecord, judging: Judging, constants, wall: float, keep_trace: bool,
             window: float | None = None) -> RunOutcome:
-    """A run's :class:`RunOutcome` from its :class:`RunRecord`, its link ``constants``,
-    the wall time it took [s], whether to keep its trace, and the window [s] of
-    per-window metrics (None: none)."""
+    """A run's :class:`RunOutcome` from its :class:`RunRecord`, what it is ``judging``
+    by, its link ``constants``, the wall time it took [s], whether to keep its trace,
+    and the window [s] of per-window metrics (None: none)."""
     r = record
     res, xhat, disturbances, supervised = r.result, r.xhat, r.disturbances, r.supervised
     navigation, given, noise, bound_inputs = r.navigation, r.given, r.noise, r.bound_inputs
@@ -167,7 +176,7 @@ def outcome(record: RunRecord, cfg: RunConfig, constants, wall: float, keep_trac
     best = achievable_power(res, constants)
     if medium is not None:  # the medium's fading (scintillation) is not a pointing loss
         best = best * medium
-    noise = constants.measurement_noise(cfg.noise_scale) if noise is None else noise
+    noise = constants.measurement_noise(judging.noise_scale) if noise is None else noise
     bound = None
     if bound_inputs is not None and len(res.t):
         model, u, measured = bound_inputs
@@ -175,20 +184,20 @@ def outcome(record: RunRecord, cfg: RunConfig, constants, wall: float, keep_trac
             bound = run_terms(res, u, measured, model, constants, noise)
         except BoundError:
             bound = None  # no process noise: the bound is not defined
-    noise_model, bit_rate = noise, getattr(cfg, "data_bit_rate", BIT_RATE)
+    noise_model, bit_rate = noise, judging.bit_rate
     noise = noise.std
-    lay, warmup = constants.layout, cfg.scenario_spec.warmup
+    lay, warmup = constants.layout, judging.warmup
     _, possible = availability_mask(lay.reference_power(res.power_clean), best, noise)
     steps = step_flags(res.x, xhat, lay, constants.Te, warmup,
                        flags[:, 0] if supervised else None, own, possible,
                        np.asarray(res.occluded).reshape(len(res.t), -1).any(axis=1),
                        reseeded)
-    metrics = run_metrics(res.x, xhat, res.power_clean, cfg.steady_from,
+    metrics = run_metrics(res.x, xhat, res.power_clean, judging.steady_from,
                           constants, events[0].event_end if events else None,
                           lost=flags[:, 0] if supervised else None,
                           event_start=events[0].start if events else None,
                           power_max=best, noise_std=noise,
-                          warmup=cfg.scenario_spec.warmup,
+                          warmup=warmup,
                           occluded=constants.layout.reference_power(res.occluded),
                           outside=outside, noise=noise_model, bit_rate=bit_rate,
                           steps=steps,

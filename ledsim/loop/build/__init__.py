@@ -24,6 +24,7 @@ from ledsim.loop.build.control import control_step
 from ledsim.loop.build.estimation import identified_model, run_noise
 from ledsim.loop.build.start import start_world
 from ledsim.loop.build.worlds import build_worlds
+from ledsim.loop.outcome import Judging
 from ledsim.loop.run_config import RunConfig
 from ledsim.physics.disturbances import parse_disturbance
 from ledsim.physics.gimbal_system import GimbalSystem, IdentifiedGimbalModel
@@ -60,12 +61,17 @@ class SeedRun:
 @dataclass
 class BuiltRun:
     """What :func:`build_run` builds: the model system and the identified model its
-    estimators use, the control steps each run lasts, and each seed's run."""
+    estimators use, the control steps each run lasts, each seed's run, what the runs
+    are judged by, the spec's flat names (a trace's header) and whether the control
+    step reads the vehicle's sensors (``aided``)."""
 
     system: GimbalSystem
     model: IdentifiedGimbalModel
     steps: int
     seeds: list[SeedRun]
+    judging: Judging
+    header: dict
+    aided: bool
 
 
 def build_run(cfg: RunConfig, seeds: Sequence[int], record: bool = False) -> BuiltRun:
@@ -78,9 +84,11 @@ def build_run(cfg: RunConfig, seeds: Sequence[int], record: bool = False) -> Bui
     # disturbance changes the model (a water current sets its medium velocity).
     share = not any(parse_disturbance(d).changes_model for d in cfg.disturbances)
     worlds = build_worlds(system.config, len(seeds), system.world, share)
-    return BuiltRun(system, model, steps, [
-        build_seed(cfg, system, model, int(s), w, record)
-        for s, w in zip(seeds, worlds, strict=True)])
+    runs = [build_seed(cfg, system, model, int(s), w, record)
+            for s, w in zip(seeds, worlds, strict=True)]
+    judging = Judging(cfg.noise_scale, cfg.data_bit_rate, cfg.scenario_spec.warmup,
+                      cfg.steady_from)
+    return BuiltRun(system, model, steps, runs, judging, cfg.flat(), cfg.imu)
 
 
 def build_seed(cfg: RunConfig, system: GimbalSystem, model, seed: int, world: LinkWorld,
