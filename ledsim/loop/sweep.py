@@ -30,7 +30,7 @@ from ledsim.errors import LedsimError
 from ledsim.files.outputs import atomic_write_text
 from ledsim.files.results import to_jsonable
 from ledsim.loop.report import Stat
-from ledsim.loop.run_config import RunConfig
+from ledsim.loop.run_config import FLAT, RunConfig
 from ledsim.physics.scene import DEFAULT_DEPTH
 
 log = logging.getLogger("ledsim")
@@ -52,7 +52,12 @@ METRIC_COLUMNS = ("rmse_x1", "rmse_x2", "rmse_steady_x1", "rmse_steady_x2",
 #: Columns that depend on the machine and its load: the only ones that may differ
 #: between backends or reruns.
 TIMING_COLUMNS = ("us_per_step", "realtime_factor")
-COLUMNS = CELL_COLUMNS + METRIC_COLUMNS + TIMING_COLUMNS
+#: The rest of the run's spec, by its names (:data:`~ledsim.loop.run_config.FLAT`): every
+#: setting a cell ran with that the columns above do not give (a repeatable one's items
+#: joined by ``;``). Last, so that the columns before keep their places.
+SPEC_COLUMNS = tuple(n for n in FLAT if n not in CELL_COLUMNS and n not in (
+    "estimator", "disturbances", "distance", "noise_scale", "seeds", "workers"))
+COLUMNS = CELL_COLUMNS + METRIC_COLUMNS + TIMING_COLUMNS + SPEC_COLUMNS
 
 
 def split_disturbance(cell: str) -> tuple[str, ...]:
@@ -166,6 +171,9 @@ def run_cell(job: tuple[RunConfig, Cell]) -> dict:
            "received_power_w": m.mean_power, "loss_events": m.loss_events,
            "false_loss_events": m.false_loss_events, "reseeds": m.reseeds,
            "silent_error_share": m.silent_error_share}
+    flat = cfg.flat()
+    row.update({n: ";".join(flat[n]) if isinstance(flat[n], tuple) else flat[n]
+                for n in SPEC_COLUMNS})
     return {"version": __version__, "row": to_jsonable(row)}
 
 
@@ -217,8 +225,8 @@ def _csv(rows: list[dict], columns: Sequence[str]) -> str:
     buf = io.StringIO()
     w = csv.DictWriter(buf, columns, lineterminator="\n")
     w.writeheader()
-    for r in rows:
-        w.writerow({k: ("" if r[k] is None else repr(r[k]) if isinstance(r[k], float)
+    for r in rows:  # a cell finished by an older ledsim lacks the newer columns: blank
+        w.writerow({k: ("" if r.get(k) is None else repr(r[k]) if isinstance(r[k], float)
                         else r[k]) for k in columns})
     return buf.getvalue()
 
