@@ -14,12 +14,11 @@ it steps, so the worlds are split over ``threads`` threads. The poses the sensor
 from __future__ import annotations
 
 from collections.abc import Sequence
-from concurrent.futures import ThreadPoolExecutor
 
 import mujoco
 import numpy as np
 
-from ledsim.physics.tick import OwnsThreads, advance, prepare
+from ledsim.physics.tick import PhysicsPass, prepare, step_worlds
 from ledsim.physics.world import RAY_GROUPS, LinkWorld
 
 
@@ -168,8 +167,12 @@ class WorldPoses:
         return ang, lin - cross3(self.site_pos[:, self.reference] - self.root_com, ang)
 
 
-class WorldBatch(WorldPoses, OwnsThreads):
-    """N worlds advanced one control period at a time (their poses gathered after each).
+class WorldBatch(WorldPoses):
+    """N worlds advanced one control period at a time (their poses gathered after each):
+    the training data's worlds, ticked as :class:`~ledsim.physics.world_rows.WorldRows`
+    ticks its rows (:func:`~ledsim.physics.tick.step_worlds` over a
+    :class:`~ledsim.physics.tick.PhysicsPass`), without sensors or vehicles. A context
+    manager: it owns its threads.
 
     Args:
         worlds: the worlds, each already reset to its initial state.
@@ -182,48 +185,44 @@ class WorldBatch(WorldPoses, OwnsThreads):
         if len(worlds) != len(disturbances) or not worlds:
             raise ValueError("one list of disturbances per world, and at least one world")
         super().__init__(worlds)
-        self.disturbances = [list(d) for d in disturbances]
         n = len(self.worlds)
-        self.applied = np.zeros(n)  # motor torques of the last step [N m]
         self.threads = max(1, min(int(threads), n))
-        bounds = np.linspace(0, n, self.threads + 1).round().astype(int)
-        self._chunks = [range(a, b) for a, b in zip(bounds[:-1], bounds[1:], strict=True)]
-        self._pool = ThreadPoolExecutor(self.threads) if self.threads > 1 else None
+        self._physics = PhysicsPass(self.worlds, self.threads)
+        self.disturbances = [list(d) for d in disturbances]
+        self.applied = np.zeros(n)  # motor torques of the last step [N m]
         self.time = self.worlds[0].time
         for i in range(n):
             prepare(self.worlds[i], self.disturbances[i], self.time)
         self.gather()
 
-    def _advance(self, chunk: range, torques: list, t_next: float) -> None:
-        for i in chunk:
-            self.applied[i] = advance(self.worlds[i], self.disturbances[i], torques[i], t_next)
-
-    def _map(self, work, *args) -> None:
-        """``work(chunk, *args)`` for every thread's chunk of worlds, then gather."""
-        if self._pool is None:
-            work(self._chunks[0], *args)
-        else:
-            for f in [self._pool.submit(work, c, *args) for c in self._chunks]:
-                f.result()
-        self.gather()
-
     def step(self, torques: np.ndarray, t_next: float) -> None:
         """Command the motor torques [N m] (clipped at the limit; ``applied`` holds what
         was applied), advance every world by Te, and prepare step ``t_next`` [s]."""
-        self._map(self._advance, np.asarray(torques, dtype=float).tolist(), t_next)
+        for i, torque in enumerate(np.asarray(torques, dtype=float).tolist()):
+            self.applied[i] = self.worlds[i].set_torque(torque)
+        step_worlds(self._physics, list(zip(self.worlds, self.disturbances,
+                                            [t_next] * len(self.worlds), strict=True)))
+        self.gather()
         self.time = t_next
-
-    def _set_state(self, chunk: range, states: np.ndarray, spec: int) -> None:
-        for i in chunk:
-            w = self.worlds[i]
-            mujoco.mj_setState(w.model, w.data, states[i], spec)
-            prepare(w, self.disturbances[i], float(states[i, 0]))
 
     def set_state(self, states: np.ndarray) -> None:
         """Every world to its full physics state (``mjSTATE_FULLPHYSICS``, (N, nstate),
         as ``mujoco.rollout`` returns them), with its kinematics."""
-        self._map(self._set_state, states, mujoco.mjtState.mjSTATE_FULLPHYSICS)
+        spec = mujoco.mjtState.mjSTATE_FULLPHYSICS
+        for i, w in enumerate(self.worlds):
+            mujoco.mj_setState(w.model, w.data, states[i], spec)
+            prepare(w, self.disturbances[i], float(states[i, 0]))
+        self.gather()
         self.time = float(states[0, 0])
+
+    def close(self) -> None:
+        self._physics.close()
+
+    def __enter__(self):
+        return self
+
+    def __exit__(self, *exc) -> None:
+        self.close()
 
 
 def dot3(a: np.ndarray, b: np.ndarray) -> np.ndarray:
