@@ -23,7 +23,11 @@ from typing import TypeVar
 from tqdm.auto import tqdm
 
 from ledsim.errors import LedsimError
-from ledsim.experiment.workers import Workers
+from ledsim.experiment.workers import (  # noqa: F401 (aliases: the errors run_jobs raises)
+    RemoteTraceback,
+    WorkerDied,
+    Workers,
+)
 from ledsim.files.outputs import check_interrupt
 
 #: One BLAS/OpenMP thread per process, so that N workers use N cores. Effective only

@@ -8,8 +8,14 @@ from dataclasses import dataclass, fields, replace
 from ledsim.agent.autopilot import StationKeeping
 from ledsim.constants import NavigationNoise
 from ledsim.experiment.scenario import Scenario
-from ledsim.loop.registry import (
+from ledsim.loop.registry import (  # noqa: F401 (aliases: the choices where ledsim 0.2 had them)
+    ACQUISITIONS,
+    COMPARED_ESTIMATORS,
+    FILTER_DISTANCES,
+    LOOP_ESTIMATORS,
+    MAX_INITIAL_ANGLE,
     MIN_FAST_PEAK_SNR,
+    OMEGA_MODELS,
     PHYSICS_SCENARIOS,
     peak_snr,
 )
