@@ -15,9 +15,9 @@ def _check_vehicle(cfg) -> None:
     once with ``--no-imu`` (the run then has no station keeping)."""
     if cfg.scene is None:
         return
-    from ledsim.physics.world import LinkWorld
+    from ledsim.loop.validation import check_world
 
-    ids = LinkWorld(cfg.world_config()).ids
+    ids = check_world(cfg.world_config())  # the validation's world, built once
     if ids.vehicle_sensors is not None:
         return
     if cfg.imu:

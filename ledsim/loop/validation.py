@@ -149,11 +149,13 @@ def validate_run(cfg) -> None:
 
 
 @functools.lru_cache(maxsize=32)
-def check_world(config: WorldConfig) -> None:
+def check_world(config: WorldConfig):
     """Build the world of ``config`` once and look for the LED from each photodiode: a
     scene that cannot be built, or an LED that no photodiode can see (behind the
     receiver, or under the scene's seabed), is refused before any run starts rather
-    than in its first step. Raises :class:`~ledsim.physics.scene.WorldError`."""
+    than in its first step. Raises :class:`~ledsim.physics.scene.WorldError`. Returns
+    the scene's ids (:class:`~ledsim.physics.scene_ids.SceneIds`: which of the vehicle's
+    sensors it has), cached with the check."""
     import mujoco
 
     from ledsim.physics.sensor import IrradianceSensor
@@ -173,6 +175,7 @@ def check_world(config: WorldConfig) -> None:
                          f"{config.depth:g} m, under the scene's seabed {hull - floor:g} m "
                          f"below it: the LED must be less than {hull - floor:g} m deeper "
                          "than the receiver") from None
+    return world.ids
 
 
 def run_from_dict(cls, saved: dict):

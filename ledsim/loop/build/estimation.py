@@ -177,7 +177,7 @@ def check_checkpoint(cfg: RunConfig) -> None:
     """Fail fast (before any worker starts) on a checkpoint that does not fit."""
     if cfg.estimator in KKL_ESTIMATORS:
         for m in kkl_members(cfg):
-            ckpt.load(m.checkpoint, GimbalSystem(m.world))
+            ckpt.load(m.checkpoint, member_system(m.world))  # the run's own, built once
 
 
 def run_noise(cfg: RunConfig, system: GimbalSystem) -> MeasurementNoise:
