@@ -164,19 +164,21 @@ class ClosedLoop:
         runs, n, Te = self.runs, len(self.runs), self.Te
         keep = [keep_trace] * n if isinstance(keep_trace, bool) else list(keep_trace)
         t0 = time.perf_counter()
-        # The tick of every world (physics.tick.advance in parts): each torque
-        # commanded, then the rows' physics, preparation and vehicles in one tick.
+        # The tick of every world (physics.tick.advance in parts): each run's control
+        # step on its reading, then the rows' torques, physics, preparation and
+        # vehicles in one tick.
+        torques = [0.0] * n
         with self.rows as rows:
             for k in tqdm(range(self.steps), disable=not progress, desc="simulate",
                           leave=False, file=sys.stderr):
                 t = k * Te
-                for run, reading in zip(runs, rows.read(), strict=True):
-                    torque = run.control(k, t, reading)
+                for i, (run, reading) in enumerate(zip(runs, rows.read(), strict=True)):
+                    torques[i] = run.control(k, t, reading)
                     if self.on_step is not None:
                         self.on_step(run, t)
-                    run.applied[k] = run.world.set_torque(torque)
-                t_next = (k + 1) * Te
-                rows.tick(t_next)
+                for run, applied in zip(runs, rows.tick((k + 1) * Te, torques=torques),
+                                        strict=True):
+                    run.applied[k] = applied
                 if (k + 1) % REPORT_EVERY == 0:  # the share done, for run_jobs' bar
                     report_progress((k + 1) / self.steps)
         wall = time.perf_counter() - t0

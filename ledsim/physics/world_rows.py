@@ -67,10 +67,15 @@ class WorldRows:
         """Every row's sensor, in one pass."""
         return self.sensors.read()
 
-    def tick(self, t_next, stepping: np.ndarray | None = None) -> None:
-        """The rest of the tick once each world's torque is commanded: the physics of
-        the ``stepping`` rows (None: all) one control period, each prepared at its
-        ``t_next`` [s] (one time, or one per row), then every vehicle row acts at it."""
+    def tick(self, t_next, stepping: np.ndarray | None = None, torques=None):
+        """One tick: each row's motor torque [N m] commanded (``torques``, one per row,
+        clipped at the limit; None: commanded already), the physics of the ``stepping``
+        rows (None: all) one control period, each prepared at its ``t_next`` [s] (one
+        time, or one per row), then every vehicle row acts at it. Returns the torques
+        applied (None when none were given)."""
+        applied = None
+        if torques is not None:
+            applied = [w.set_torque(t) for w, t in zip(self.worlds, torques, strict=True)]
         if self._physics is None:
             self._physics = PhysicsPass(self.worlds, self.threads)
         n = len(self.worlds)
@@ -82,6 +87,7 @@ class WorldRows:
             times = np.asarray(t_next, dtype=float)
             ticks = [(self.worlds[i], self.disturbances[i], float(times[i])) for i in rows]
         step_worlds(self._physics, ticks, self.vehicles, t_next)
+        return applied
 
     def close(self) -> None:
         """Stop the physics' threads (a later tick starts them again)."""
