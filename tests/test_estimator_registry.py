@@ -59,3 +59,21 @@ def test_a_link_preset_names_the_designs_its_run_loads():
         assert p.scheduled_design == ("scheduled" if bench else "scheduled-lens"), name
         assert p.holds_gain_when_driven is not bench, name
         require_shipped_checkpoint(0.085, "mujoco", p.scheduled_design)
+
+
+def test_each_entry_builds_its_estimator():
+    """The registry carries the builders: build_estimator asks the entry, not the name."""
+    from ledsim.experiment.estimators import REGISTRY, build_estimator
+    from ledsim.files.resources import shipped_checkpoint
+    from ledsim.paper.model import LEDLinkModel
+
+    model = LEDLinkModel()
+    kinds = {"ekf": "ExtendedKalmanFilter", "ukf": "UnscentedKalmanFilter",
+             "pf": "ParticleFilter", "oracle": "NoneType"}
+    for e in REGISTRY:
+        if e.name in kinds:
+            est = build_estimator(e.name, model, particles=50)
+            assert type(est).__name__ == kinds[e.name]
+    assert build_estimator("kkl", model, checkpoint=shipped_checkpoint(0.085)) is not None
+    with pytest.raises(LedsimError, match="needs a checkpoint"):
+        build_estimator("kkl-paper", model)

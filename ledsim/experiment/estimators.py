@@ -21,6 +21,7 @@ oracle      handed the true state (MuJoCo loop only): the best any estimator can
 from __future__ import annotations
 
 import math
+from collections.abc import Callable
 from dataclasses import dataclass
 from pathlib import Path
 
@@ -34,13 +35,17 @@ from observer.system import DiscreteSystem
 
 @dataclass(frozen=True)
 class EstimatorEntry:
-    """One estimator of the registry: what it is, its family and the worlds it runs in.
+    """One estimator of the registry: what it is, its family, the worlds it runs in and
+    how it is built.
 
     Attributes:
         name: the ``--estimator`` value.
         description: one line for ``--help``.
         family: ``kkl`` (a learned KKL observer from a checkpoint), ``bayes`` (a filter
             on the model: EKF, UKF, particle filter) or ``oracle`` (handed the truth).
+        build: ``build(name, system, model, settings)`` gives the estimator (None: the
+            oracle, which the loop hands the truth); ``settings`` are
+            :func:`build_estimator`'s keyword arguments.
         closed_form: runs on the paper's closed-form model (``ledsim evaluate``).
         loop: runs in the MuJoCo loop (``ledsim run``).
         compared: one of the loop's estimators that tables and ``ledsim demo`` compare
@@ -50,26 +55,57 @@ class EstimatorEntry:
     name: str
     description: str
     family: str
+    build: Callable[..., Estimator | None]
     closed_form: bool = True
     loop: bool = True
     compared: bool = True
 
 
+#: When ``kkl-handover`` hands over [s]: the default bank's slowest time constant (0.5 s)
+#: six times over.
+HANDOVER_S = 3.0
+
+
+def _kkl(name, system, model, s) -> Estimator:
+    if s["checkpoint"] is None:
+        raise LedsimError(f"estimator {name!r} needs a checkpoint")
+    return ckpt.load(s["checkpoint"], system, model=model, use_omega=s["use_omega"],
+                     name=name)
+
+
+def _handover(name, system, model, s) -> Estimator:
+    if s["checkpoint"] is None or s["slow_checkpoint"] is None:
+        raise LedsimError("estimator 'kkl-handover' needs a fast and a slow checkpoint")
+    fast, slow = (_kkl("kkl", system, model, {**s, "checkpoint": c})
+                  for c in (s["checkpoint"], s["slow_checkpoint"]))
+    return HandoverKKL(fast, slow, handover_steps=int(round(HANDOVER_S / system.Te)))
+
+
+def _pf(name, system, model, s) -> Estimator:
+    return ParticleFilter(model, s["particles"],
+                          **({} if s["redraw"] else {"lost_chi2": math.inf}))
+
+
 #: Every estimator, in the order ``--help`` lists them.
-REGISTRY = tuple(EstimatorEntry(*e) for e in (
-    ("kkl", "learned KKL observer (shipped checkpoint or --checkpoint)", "kkl"),
-    ("kkl-paper", "KKL trained with the paper's literal recipe", "kkl", True, False, False),
-    ("kkl-handover", "default KKL handing over to a slow-filter KKL after 3 s", "kkl",
-     True, False, False),
-    ("kkl-scheduled", "gain-scheduled KKL that tunes its own gain (MuJoCo loop)", "kkl",
-     True, True, False),
-    ("kkl-bank", "bank of fixed-gain KKL observers for 1x-13x noise (MuJoCo loop)", "kkl",
-     False),
-    ("ekf", "extended Kalman filter", "bayes"),
-    ("ukf", "unscented Kalman filter", "bayes"),
-    ("pf", "bootstrap particle filter", "bayes"),
-    ("oracle", "handed the true state (MuJoCo loop only)", "oracle", False),
-))
+REGISTRY = (
+    EstimatorEntry("kkl", "learned KKL observer (shipped checkpoint or --checkpoint)", "kkl",
+                   _kkl),
+    EstimatorEntry("kkl-paper", "KKL trained with the paper's literal recipe", "kkl", _kkl,
+                   loop=False, compared=False),
+    EstimatorEntry("kkl-handover", "default KKL handing over to a slow-filter KKL after 3 s",
+                   "kkl", _handover, loop=False, compared=False),
+    EstimatorEntry("kkl-scheduled", "gain-scheduled KKL that tunes its own gain (MuJoCo "
+                   "loop)", "kkl", _kkl, compared=False),
+    EstimatorEntry("kkl-bank", "bank of fixed-gain KKL observers for 1x-13x noise (MuJoCo "
+                   "loop)", "kkl", _kkl, closed_form=False),
+    EstimatorEntry("ekf", "extended Kalman filter", "bayes",
+                   lambda name, system, model, s: ExtendedKalmanFilter(model)),
+    EstimatorEntry("ukf", "unscented Kalman filter", "bayes",
+                   lambda name, system, model, s: UnscentedKalmanFilter(model)),
+    EstimatorEntry("pf", "bootstrap particle filter", "bayes", _pf),
+    EstimatorEntry("oracle", "handed the true state (MuJoCo loop only)", "oracle",
+                   lambda name, system, model, s: None, closed_form=False),
+)
 #: name -> description, every estimator (the registry's names; kept for ``--help``).
 ESTIMATORS = {e.name: e.description for e in REGISTRY}
 #: What ``ledsim evaluate --estimator`` may run (the oracle has nothing to estimate there).
@@ -88,11 +124,6 @@ def entry(name: str) -> EstimatorEntry:
         if e.name == name:
             return e
     raise LedsimError(f"unknown estimator {name!r}: choose one of {', '.join(ESTIMATORS)}")
-
-
-#: When ``kkl-handover`` hands over [s]: the default bank's slowest time constant (0.5 s)
-#: six times over.
-HANDOVER_S = 3.0
 
 
 def build_estimator(name: str, system: DiscreteSystem, *, model: DiscreteSystem | None = None,
@@ -118,23 +149,6 @@ def build_estimator(name: str, system: DiscreteSystem, *, model: DiscreteSystem 
             half).
     """
     model = system if model is None else model
-    if entry(name).family == "kkl" and name != "kkl-handover":
-        if checkpoint is None:
-            raise LedsimError(f"estimator {name!r} needs a checkpoint")
-        return ckpt.load(checkpoint, system, model=model, use_omega=use_omega, name=name)
-    if name == "kkl-handover":
-        if checkpoint is None or slow_checkpoint is None:
-            raise LedsimError("estimator 'kkl-handover' needs a fast and a slow checkpoint")
-        fast, slow = (build_estimator("kkl", system, model=model, checkpoint=c,
-                                      use_omega=use_omega)
-                      for c in (checkpoint, slow_checkpoint))
-        return HandoverKKL(fast, slow, handover_steps=int(round(HANDOVER_S / system.Te)))
-    if name == "ekf":
-        return ExtendedKalmanFilter(model)
-    if name == "ukf":
-        return UnscentedKalmanFilter(model)
-    if name == "pf":
-        return ParticleFilter(model, particles, **({} if redraw else {"lost_chi2": math.inf}))
-    if name == "oracle":
-        return None
-    raise LedsimError(f"unknown estimator {name!r}: choose one of {', '.join(ESTIMATORS)}")
+    settings = {"checkpoint": checkpoint, "particles": particles, "use_omega": use_omega,
+                "redraw": redraw, "slow_checkpoint": slow_checkpoint}
+    return entry(name).build(name, system, model, settings)
