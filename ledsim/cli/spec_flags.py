@@ -43,6 +43,10 @@ class Flag:
     form: str = "value"
     default: Any = SPEC_DEFAULT
 
+    def default_for(self, name: str):
+        """The flag's default: its own, or the spec field ``name``'s."""
+        return spec_default(name) if self.default is SPEC_DEFAULT else self.default
+
     def spelling(self, name: str) -> str:
         if self.flag is not None:
             return self.flag
@@ -179,7 +183,7 @@ def add_spec_flags(p, *names: str, **overrides: dict) -> None:
         elif f.form in ("each", "items"):
             kw.update(action="append", default=[])
         else:
-            kw["default"] = spec_default(name) if f.default is SPEC_DEFAULT else f.default
+            kw["default"] = f.default_for(name)
             if f.type is not None:
                 kw["type"] = f.type
         if f.choices is not None:
@@ -222,7 +226,7 @@ def spec_argv(spec) -> list[str]:
     argv: list[str] = []
     for name, f in flags().items():
         value = values[name]
-        default = spec_default(name) if f.default is SPEC_DEFAULT else f.default
+        default = f.default_for(name)
         if f.form == "off":
             argv += [f.spelling(name)] if not value else []
         elif f.form == "on":

@@ -99,6 +99,6 @@ def build_head(spec: mujoco.MjSpec, layout: ReceiverLayout, damping: float,
     return sites
 
 
-def receiver_centre(spec: mujoco.MjSpec, sites: list) -> np.ndarray:
+def receiver_centre(sites: list) -> np.ndarray:
     """The receiver's centre in the gimbal's frame [m]: the photodiodes' midpoint."""
     return np.mean([np.asarray(site.pos) for site in sites], axis=0)

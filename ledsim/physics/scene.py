@@ -180,7 +180,7 @@ def build_spec(config: WorldConfig) -> mujoco.MjSpec:
 
     # LED at distance d in front of the receiver centre (midpoint of the photodiodes).
     gimbal = spec.body("gimbal")
-    centre = np.asarray(gimbal.pos) + receiver_centre(spec, sites)
+    centre = np.asarray(gimbal.pos) + receiver_centre(sites)
     tx = spec.body("transmitter")
     # the LED's depth lifts it out of the receiver's plane; d stays the slant distance
     rise = transmitter_rise(config.depth, config.transmitter_depth, c.distance)
