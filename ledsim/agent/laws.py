@@ -1,6 +1,8 @@
 """Control laws: the paper's input functions, its rate damping, and the alignment loop.
 
-Every law outputs the paper's input u, an angular acceleration of phi [rad/s^2]. The
+Every law outputs the paper's input u, an angular acceleration of phi [rad/s^2], per
+gimbal axis (:mod:`ledsim.agent.axes`: a float for the paper's one axis; over n axes the
+estimate is (angles, rates) and u an array of n). The
 closed-form model adds it as ``Te u``; in MuJoCo the physics adapter turns it into a motor
 torque (``GimbalSystem.torque_for``), clipped at the torque limit. A scenario holds one
 law as a template; :meth:`start` gives a fresh copy bound to the link's constants, so
@@ -16,6 +18,7 @@ from typing import Protocol
 
 import numpy as np
 
+from ledsim.agent.axes import angles_rates, clip
 from ledsim.constants import LinkConstants
 from ledsim.radiometry.optics import receiver_response
 
@@ -52,7 +55,8 @@ class Excitation:
     """Open-loop input cos_amp cos(w t) + sin_amp sin(w t) [rad/s^2] (IF1, IF2).
 
     Attributes:
-        cos_amp, sin_amp: amplitudes [rad/s^2]; angular_frequency: w [rad/s].
+        cos_amp, sin_amp: amplitudes [rad/s^2] (arrays over the axes for several);
+        angular_frequency: w [rad/s].
     """
 
     tracks_beam = False
@@ -72,7 +76,7 @@ class Excitation:
 
 @dataclass
 class PaperRateDamping:
-    """The paper's closed loop: u = -gain * phidot_hat (gain 0.001 [1/s])."""
+    """The paper's closed loop: u = -gain * phidot_hat (gain 0.001 [1/s]), per axis."""
 
     tracks_beam = False
 
@@ -82,7 +86,7 @@ class PaperRateDamping:
         return replace(self)
 
     def __call__(self, xhat: np.ndarray, t: float) -> float:
-        return -self.gain * xhat[1]
+        return -self.gain * angles_rates(xhat)[1]
 
 
 
@@ -95,8 +99,9 @@ class AlignmentPID:
     motion inside the observers' training domain (|phidot| <= 0.5 rad/s). Inner loop: PI
     on the rate error, ``u = -kv r - ki int(r)``, ``r = phidot_hat - rate_cmd``; its
     integral rejects steady torques such as a water current on the gimbal housing.
-    The estimate is clipped to the domain and u to +-u_max, so a wrong estimate cannot
-    spin the gimbal away.
+    Over several axes each has its own loop (``phi_ref`` one target per axis, or one
+    for all), and the integral is an array. The estimate is clipped to the domain and
+    u to +-u_max, so a wrong estimate cannot spin the gimbal away.
 
     Attributes:
         phi_ref: target incidence angle [rad]; None = the intensity maximum.
@@ -127,16 +132,17 @@ class AlignmentPID:
                        else self.phi_ref)
 
     def __call__(self, xhat: np.ndarray, t: float) -> float:
-        phi = min(max(xhat[0], -self.domain[0]), self.domain[0])
-        rate = min(max(xhat[1], -self.domain[1]), self.domain[1])
-        cmd = min(max(-self.bandwidth * (phi - self.phi_ref), -self.rate_max), self.rate_max)
+        phi, rate = angles_rates(xhat)
+        phi = clip(phi, -self.domain[0], self.domain[0])
+        rate = clip(rate, -self.domain[1], self.domain[1])
+        cmd = clip(-self.bandwidth * (phi - self.phi_ref), -self.rate_max, self.rate_max)
         r = rate - cmd
-        self.integral = min(max(self.integral + r * self.Te, -self.i_max), self.i_max)
+        self.integral = clip(self.integral + r * self.Te, -self.i_max, self.i_max)
         u = -self.kv * r - self.ki * self.integral
-        return min(max(u, -self.u_max), self.u_max)
+        return clip(u, -self.u_max, self.u_max)
 
     def take_over(self, u: float) -> None:
         """Start from the input ``u`` [rad/s^2] the motor gave so far (the warm-up hold's
         torque against a steady load, such as the water on the gimbal housing): the
         integral takes it over, so the hand-over does not drop the load."""
-        self.integral = min(max(-u / self.ki, -self.i_max), self.i_max)
+        self.integral = clip(-u / self.ki, -self.i_max, self.i_max)

@@ -25,6 +25,9 @@ from __future__ import annotations
 import math
 from dataclasses import dataclass
 
+import numpy as np
+
+from ledsim.agent.axes import clip
 from ledsim.agent.beamfix import BeamFix
 from ledsim.constants import LinkConstants
 
@@ -44,8 +47,11 @@ class TimeOptimalSlew:
     time-optimal servo of Workman, Kosut and Franklin (ACC 1987) with its rate loop
     made deadbeat.
 
+    Each axis moves on its own curve (:mod:`ledsim.agent.axes`: floats for one axis,
+    arrays over several, with an inertia per axis).
+
     Args:
-        inertia: the gimbal's inertia about its hinge [kg m^2].
+        inertia: the gimbal's inertia about its hinge [kg m^2] (one per axis, or one).
         limit: the motor's torque limit [N m].
         Te: the control period [s].
         alpha: share of the limit's acceleration the braking curve plans with [-].
@@ -64,6 +70,9 @@ class TimeOptimalSlew:
     def rate_reference(self, error: float) -> float:
         """The rate [rad/s] to move at with ``error`` [rad] left to go."""
         e = abs(error)
+        if isinstance(e, np.ndarray):
+            return np.copysign(np.minimum(np.sqrt(2.0 * self.accel * e),
+                                          self.settle * e / self.Te), error)
         return math.copysign(min(math.sqrt(2.0 * self.accel * e), self.settle * e / self.Te),
                              error)
 
@@ -74,9 +83,9 @@ class TimeOptimalSlew:
         no faster than ``max_rate`` [rad/s], within the torque limit."""
         ahead = target - q - qdot * self.Te  # the error one step from now, coasting
         want = self.rate_reference(ahead)
-        want = min(max(want, -max_rate), max_rate)
+        want = clip(want, -max_rate, max_rate)
         u = (qdot - want) / self.Te
-        return min(max(u, -self.u_limit), self.u_limit)
+        return clip(u, -self.u_limit, self.u_limit)
 
 
 @dataclass

@@ -29,7 +29,13 @@ the bearing the hull's motion turned), so the angle they remember still points a
 LED after the hull has moved.
 
 The sensor reading (step 0) and the physics tick (after the step) belong to the world
-that runs the loop (:mod:`ledsim.physics.tick` in MuJoCo).
+that runs the loop (:class:`~ledsim.physics.world_rows.WorldRows` in MuJoCo).
+
+Axes: the encoder angle and rate, u and the torque are values over the gimbal's axes
+(:mod:`ledsim.agent.axes`): floats for the paper's one axis, arrays of shape (n_axes,)
+for more, with the estimate (angles, rates). The step, the laws, the motor and the
+minimum-time slew are written once for both. The link supervisor, its scan and its fix
+read a pair of photodiodes on one axis; a head of more axes runs :class:`Unsupervised`.
 """
 
 from __future__ import annotations
@@ -40,6 +46,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from ledsim.agent.axes import angles_rates, clip, magnitude
 from ledsim.agent.laws import ControlLaw
 from ledsim.constants import LinkConstants
 from observer.supervision.gimbal_load import LoadObserver
@@ -53,10 +60,12 @@ class Decision:
     """What the supervisor decided at one step.
 
     Attributes:
-        xhat: the estimate (phi [rad], phidot [rad/s]).
+        xhat: the estimate (phi [rad], phidot [rad/s]; over n axes the n angles, then
+            the n rates).
         lost: the estimate is not trusted (inconsistent with the data, or scanning).
         acquiring: the acquisition scan has the motor.
-        u: the acquisition's input, phi'' [rad/s^2] (None: the control law decides).
+        u: the acquisition's input, phi'' [rad/s^2], per axis (None: the control law
+            decides).
         reseeded: the acquisition handed over this step (the estimator restarted from
             it, or kept as it is: the oracle, a weak-light hand-over); the control law
             starts afresh.
@@ -72,7 +81,7 @@ class Decision:
     xhat: np.ndarray
     lost: bool
     acquiring: bool = False
-    u: float | None = None
+    u: float | np.ndarray | None = None
     reseeded: bool = False
     reason: str = ""
     held: np.ndarray | None = None
@@ -92,7 +101,8 @@ class Unsupervised:
     [rad] (the oracle's minimum-time acquisition: its estimate is the truth), hands
     over to the control law on arrival (within ``arrive_tol`` [rad], under
     ``arrive_rate`` [rad/s]), and slews again whenever the estimate is more than
-    ``reslew`` [rad] off the target (a kick, a hull strike).
+    ``reslew`` [rad] off the target (a kick, a hull strike). Over several axes the
+    slew moves them all, and the tolerances hold on each.
     """
 
     def __init__(self, estimator, slew=None, phi_ref: float = 0.0,
@@ -117,13 +127,15 @@ class Unsupervised:
         xhat = self.estimator.update(y)
         if self.slew is None:
             return Decision(xhat, False)
-        phi, phidot = xhat  # the one axis's angle and rate
-        error = float(phi) - self.phi_ref  # phi = phi_home - q: the encoder's way to go
+        phi, phidot = angles_rates(xhat)
+        if not isinstance(phi, np.ndarray):
+            phi = float(phi)
+        error = phi - self.phi_ref  # phi = phi_home - q: the encoder's way to go
         if not self.slewing:
-            if abs(error) <= self.reslew:
+            if magnitude(error) <= self.reslew:
                 return Decision(xhat, False)
             self.slewing = True
-        if abs(error) < self.arrive_tol and abs(float(phidot)) < self.arrive_rate:
+        if magnitude(error) < self.arrive_tol and magnitude(phidot) < self.arrive_rate:
             self.slewing = False
             return Decision(xhat, False, reseeded=True, reason="acquired")
         return Decision(xhat, False, True, self.slew.command(q, qdot, q + error),
@@ -138,10 +150,12 @@ class GimbalMotor:
 
     The control step works in u throughout; the motor turns it into a torque once, at
     the end: phi = phi_home - q, so a torque tau gives phi'' = -tau / I, and
-    ``torque(u) = -I u``. The torque limit is ``u_limit = limit / I`` in u.
+    ``torque(u) = -I u``. The torque limit is ``u_limit = limit / I`` in u. Over several
+    axes each has its motor: ``inertia`` (and ``q_hold``) one per axis, and u, the
+    torque and the encoder arrays of that many (:mod:`ledsim.agent.axes`).
 
     Args:
-        inertia: the gimbal's inertia about the hinge [kg m^2].
+        inertia: the gimbal's inertia about the hinge [kg m^2] (an array: one per axis).
         q_hold: encoder angle [rad] the motor holds during the warm-up.
         hold_gains: PD gains of that hold (1/s^2, 1/s): 10 rad/s of bandwidth.
         limit: the motor's torque limit [N m].
@@ -149,7 +163,10 @@ class GimbalMotor:
 
     def __init__(self, inertia: float, q_hold: float = 0.0,
                  hold_gains: tuple[float, float] = (400.0, 40.0), limit: float = math.inf):
+        if np.ndim(inertia):
+            inertia = np.asarray(inertia, dtype=float)
         self.inertia = inertia
+        self.n_axes = int(np.size(inertia))
         self.q_hold = q_hold
         self.hold_gains = hold_gains
         self.limit = limit
@@ -157,7 +174,7 @@ class GimbalMotor:
 
     def applied(self, u: float) -> float:
         """The u [rad/s^2] the motor gives for a commanded ``u`` (clipped at its limit)."""
-        return min(max(u, -self.u_limit), self.u_limit)
+        return clip(u, -self.u_limit, self.u_limit)
 
     def torque(self, u: float) -> float:
         """Motor torque [N m] that commands angular acceleration ``u`` [rad/s^2] of phi,
@@ -167,7 +184,7 @@ class GimbalMotor:
         tau = -self.inertia * u
         if not math.isfinite(self.limit):
             return tau
-        return self.limit * min(max(tau / self.limit, -1.0), 1.0)
+        return self.limit * clip(tau / self.limit, -1.0, 1.0)
 
     def acceleration(self, torque: float) -> float:
         """The u [rad/s^2] a motor torque [N m] commands (an agent's torque, say)."""
@@ -244,8 +261,12 @@ class ControlStep:
         """The motor torque [N m] (u itself for :class:`DirectInput`) of step ``t`` [s]
         from the measured powers ``y`` [W], the encoder angle ``q`` [rad] and rate
         ``qdot`` [rad/s], and (None: no vehicle sensors) the vehicle's measured line of
-        sight ``los``."""
+        sight ``los``. ``q``, ``qdot`` and the torque are floats for one axis, arrays
+        of shape (n_axes,) for more."""
         if los is not None:  # the encoder in the line of sight's frame
+            if isinstance(q, np.ndarray):
+                raise ValueError("the vehicle's line of sight turns one axis (the pan): "
+                                 "a step of several axes takes los=None")
             load = 0.0 if self.load is None else \
                 self.load.update(qdot + los.hull_rate, self._motor_u)
             q, qdot = q - los.bearing, qdot - los.incidence_rate

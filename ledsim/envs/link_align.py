@@ -67,7 +67,7 @@ from ledsim.loop.build.start import start_world
 from ledsim.loop.run_config import EstimatorPart, RunConfig, TaskPart, WorldPart
 from ledsim.physics.gimbal_system import GimbalSystem
 from ledsim.physics.sensor import SensorReading
-from ledsim.physics.tick import prepare
+from ledsim.physics.world_rows import WorldRows
 from ledsim.radiometry.link_presets import link_constants, preset_named
 from ledsim.radiometry.optics import IMPOSSIBLE_SIGMAS, achievable_power, peak_power
 
@@ -162,7 +162,9 @@ class LinkAlignEnv(gym.Env, EzPickle):
         if self.cfg.imu:
             low, high = np.r_[low, -VEHICLE_BOUND], np.r_[high, VEHICLE_BOUND]
         self.observation_space = spaces.Box(low, high, dtype=np.float64)
-        self.action_space = spaces.Box(-1.0, 1.0, (1,), np.float32)
+        # one duty per gimbal axis (the paper's one axis: shape (1,))
+        self.action_space = spaces.Box(-1.0, 1.0, (self.world.n_axes,), np.float32)
+        self.rows = WorldRows([self.world])  # the world as a row of one: the one tick
         self.sensor = None
         self.vehicle = None
         self.disturbances: list = []
@@ -207,8 +209,9 @@ class LinkAlignEnv(gym.Env, EzPickle):
             self.run_seed = int(self.np_random.integers(2**31))
         else:
             self.run_seed = int(seed)
-        self.sensor, self.disturbances, self.vehicle = start_world(
+        self.sensor, self.disturbances, vehicle = start_world(
             self.cfg, self.system, self.world, self.run_seed, x0, self.measurement_noise)
+        (self.vehicle,) = self.rows.start([self.sensor], [self.disturbances], [vehicle])
         self.start_gimbal_angle = self.world.gimbal_angle
         self.k = 0
         self.episode += 1
@@ -216,11 +219,11 @@ class LinkAlignEnv(gym.Env, EzPickle):
 
     def step(self, action):
         self.command(action)
-        self.world.step()
-        return self.finish_step()
+        self.rows.tick(self.k * self.dt)
+        return self.observe_step()
 
     # The step in parts, so that a vector of these envs (envs.vector) steps the physics
-    # and the vehicles of all its worlds in one pass: the same tick either way.
+    # and the vehicles of all its worlds in one pass, on its own rows: the same tick.
 
     def command(self, action) -> float:
         """Check ``action`` and command its torque [N m] (the physics not yet stepped);
@@ -228,18 +231,15 @@ class LinkAlignEnv(gym.Env, EzPickle):
         if self.sensor is None:
             raise RuntimeError("call reset() before step()")
         a = np.asarray(action, dtype=float).reshape(-1)
-        if a.size != 1 or not np.isfinite(a[0]):
-            raise ValueError(f"action {action!r} is not allowed: one finite number in "
-                             "[-1, 1]")
-        a = min(max(float(a[0]), -1.0), 1.0)
+        n = self.action_space.shape[0]
+        if a.size != n or not np.isfinite(a).all():
+            raise ValueError(f"action {action!r} is not allowed: "
+                             + ("one finite number" if n == 1 else f"{n} finite numbers")
+                             + " in [-1, 1]")
         self.k += 1
-        return self.world.set_torque(a * self.torque_limit)
-
-    def finish_step(self):
-        """After the physics stepped: prepare the next control step, observe, reward
-        (``step``'s return)."""
-        prepare(self.world, self.disturbances, self.k * self.dt, self.vehicle)
-        return self.observe_step()
+        if n > 1:  # one duty per axis
+            return self.world.set_torques(np.clip(a, -1.0, 1.0) * self.torque_limit)
+        return self.world.set_torque(min(max(float(a[0]), -1.0), 1.0) * self.torque_limit)
 
     def observe_step(self, reading=None):
         """After the next control step was prepared (its vehicle acted): observe (the
@@ -262,6 +262,7 @@ class LinkAlignEnv(gym.Env, EzPickle):
         return self._recorder.render(self.k * self.dt, r)
 
     def close(self):
+        self.rows.close()
         if self._recorder is not None:
             self._recorder.close()
             self._recorder = None

@@ -125,13 +125,15 @@ class LinkAlignVectorEnv(VectorEnv):
         return first
 
     def step(self, actions):
-        """One control step of every sub-environment: ``actions`` (N, 1), each the
-        single env's action. Returns the batched (obs, reward, terminated, truncated,
-        info) of Gymnasium's vector API, with the autoreset of the module docstring."""
+        """One control step of every sub-environment: ``actions`` (N, n_axes), each the
+        single env's action (n_axes = 1 for the paper's gimbal). Returns the batched
+        (obs, reward, terminated, truncated, info) of Gymnasium's vector API, with the
+        autoreset of the module docstring."""
         actions = np.asarray(actions)
         if actions.shape[:1] != (self.num_envs,):
             raise ValueError(f"actions of shape {actions.shape} are not allowed: one row "
-                             f"per sub-environment, ({self.num_envs}, 1)")
+                             f"per sub-environment, ({self.num_envs}, "
+                             f"{self.single_action_space.shape[0]})")
         envs, n = self.envs, self.num_envs
         stepping = ~self._ended if self.mode == AutoresetMode.NEXT_STEP else \
             np.ones(n, dtype=bool)

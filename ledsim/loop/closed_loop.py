@@ -2,13 +2,13 @@
 
 MuJoCo supplies the true angle, the ray sensors the two powers (every seed's read in
 one pass: :class:`~ledsim.physics.sensor_rows.SensorRows`), and each seed's
-:class:`~ledsim.agent.step.ControlStep` (dropout gate, supervisor with its estimator, control
-law, motor) turns them into a motor torque; :func:`~ledsim.physics.tick.advance` moves
-the world on. :class:`ClosedLoop` steps the runs of several seeds together, their
-physics split over threads (MuJoCo steps without the GIL); a run of one seed is the
-same code with N = 1, so a seed's numbers are the same whatever else runs beside it.
-Every run of a seed sees the same sensor-noise draws and disturbances whatever the
-estimator.
+:class:`~ledsim.agent.step.ControlStep` (dropout gate, supervisor with its estimator,
+control law, motor) turns them into a motor torque; one tick of
+:class:`~ledsim.physics.world_rows.WorldRows` moves every world on. :class:`ClosedLoop`
+steps the runs of several seeds together, their physics split over threads (MuJoCo
+steps without the GIL); a run of one seed is the same code with N = 1, so a seed's
+numbers are the same whatever else runs beside it. Every run of a seed sees the same
+sensor-noise draws and disturbances whatever the estimator.
 """
 
 from __future__ import annotations
@@ -50,20 +50,23 @@ class LoopRun:
         self.supervised = isinstance(self.step.supervisor, LinkSupervisor)
         lay = system.constants.layout
         npd, nx = lay.n_photodiodes, lay.n_state
+        # u and the torque: one float a step for one axis, one per axis for more
+        self.axes = lay.n_axes
+        per_axis = () if self.axes == 1 else (self.axes,)
         self.geo = np.empty((steps, 4, npd))  # distance, theta, phi, visible fraction
         self.state = np.empty((steps, nx))
         self.gimbal = np.empty((steps, nx))
         self.hull = np.empty((steps, 3))
         self.power = np.empty((steps, npd))
         self.clean = np.empty((steps, npd))
-        self.applied = np.empty(steps)
+        self.applied = np.empty((steps, *per_axis))
         self.xhat = np.empty((steps, nx))  # what the run reports (held while lost)
         self.own = np.empty((steps, nx))  # the estimator's own estimate
         self.xhat_std = np.full((steps, nx), np.nan)  # the held estimate's std (NaN: none)
         self.flags = np.zeros((steps, 2), dtype=bool)  # lost, acquiring
         self.reseeded = np.zeros(steps, dtype=bool)  # the supervisor restarted the estimator
         # What the estimator was told and given (for the bound): u [rad/s^2], samples.
-        self.u = np.zeros(steps)
+        self.u = np.zeros((steps, *per_axis))
         self.measured = np.ones((steps, npd), dtype=bool)
         self.outside = np.zeros(steps, dtype=bool)  # the estimator left its training box
         # The medium's factor on the reference photodiode's power (scintillation): the
@@ -77,11 +80,16 @@ class LoopRun:
 
     def control(self, k: int, t: float, reading: SensorReading | None = None) -> float:
         """Record the sensor's ``reading`` at step ``k`` (time ``t`` [s]; None: read it
-        now), and return the motor torque [N m] the control step commands."""
+        now), and return the motor torque [N m] the control step commands (per axis)."""
         r = self._latest.reading = self.sensor.read() if reading is None else reading
         self.geo[k] = r.distance, r.emission_angle, r.incidence_angle, r.visible_fraction
         self.state[k] = r.phi, r.phidot
-        self.gimbal[k] = r.gimbal_angle, r.gimbal_rate
+        if self.axes == 1:
+            q, qdot = r.gimbal_angle, r.gimbal_rate
+            self.gimbal[k] = q, qdot
+        else:
+            q, qdot = self.world.gimbal_angles, self.world.gimbal_rates
+            self.gimbal[k, :self.axes], self.gimbal[k, self.axes:] = q, qdot
         self.hull[k], self.power[k], self.clean[k] = r.hull_pos, r.power, r.power_clean
         if self.world.light_gain is not None:
             self.medium[k] = self.world.light_gain[self.world.config.constants.layout.reference]
@@ -89,7 +97,7 @@ class LoopRun:
             self.navigated[k] = self.vehicle.navigated_position
         t0 = time.perf_counter()
         los = self.vehicle.los if self.aided else None
-        torque = self.step(r.power, t, r.gimbal_angle, r.gimbal_rate, los)
+        torque = self.step(r.power, t, q, qdot, los)
         self.spent += time.perf_counter() - t0
         d = self.step.decision
         self.xhat[k] = d.reported

@@ -3,8 +3,9 @@
 One pass at step k (t = k Te): the sensor samples y_k and the true state
 x_k = (phi, phidot) of photodiode 1 on a world prepared for t (disturbances acted,
 kinematics updated), the gimbal torque u_k is chosen (a profile, or a controller fed with
-the sensor reading), and :func:`~ledsim.physics.tick.advance` moves physics on by Te in
-``substeps`` MuJoCo steps and prepares the next step.
+the sensor reading), and the world's tick (a row of one of
+:class:`~ledsim.physics.world_rows.WorldRows`) moves physics on by Te in ``substeps``
+MuJoCo steps and prepares the next step.
 """
 
 from __future__ import annotations
@@ -24,8 +25,9 @@ from ledsim.errors import LedsimError
 from ledsim.files.outputs import atomic_write_bytes
 from ledsim.physics.layout import ReceiverLayout
 from ledsim.physics.sensor import IrradianceSensor, SensorReading
-from ledsim.physics.tick import advance, prepare
+from ledsim.physics.tick import prepare
 from ledsim.physics.world import LinkWorld
+from ledsim.physics.world_rows import WorldRows
 
 
 class ProfileError(LedsimError):
@@ -159,6 +161,8 @@ def simulate(world: LinkWorld, sensor: IrradianceSensor, seconds: float,
     power = np.empty((n, lay.n_photodiodes)) if controller else None
     t0 = world.time
     prepare(world, disturbances, t0, vehicle)
+    rows = WorldRows([world])  # the world as a row of one: the one tick
+    rows.start([sensor], [list(disturbances)], [vehicle])
     for k in tqdm(range(n), disable=not progress, desc="simulate", leave=False,
                   file=sys.stderr):
         t = t0 + k * Te
@@ -174,7 +178,7 @@ def simulate(world: LinkWorld, sensor: IrradianceSensor, seconds: float,
             u = controller(r, t)
         gimbal[k] = world.gimbal_angle, world.gimbal_rate
         hull[k] = world.hull_pos
-        applied[k] = advance(world, disturbances, u, t0 + (k + 1) * Te, vehicle)
+        applied[k] = rows.tick(t0 + (k + 1) * Te, torques=(u,))[0]
     clean = sensor.clean_power(geo[:, 0], geo[:, 1], geo[:, 2], geo[:, 3])
     if power is None and sensor.signal_noise:
         power = sensor.measurement_noise.measure(clean, sensor.rng)

@@ -1,8 +1,10 @@
 """The physics tick: the one way the world moves from one control step to the next.
 
-``simulate``, the closed loop (one run or many), the training data and the Gymnasium
-environment all advance the world through :func:`advance`, and start a step through
-:func:`prepare`, so a control step sees the same world whoever runs it:
+Every world starts a step through :func:`prepare` and moves through the same three
+parts, so a control step sees the same world whoever runs it. The rows of
+:class:`~ledsim.physics.world_rows.WorldRows` (the closed loop, the envs, ``simulate``,
+the wave response) and the training data's ``WorldBatch`` take them for many worlds at
+once (:func:`step_worlds`); :func:`advance` is the same tick for one world, in one call:
 
     prepare(t):   hull wrench cleared, disturbances act at t, kinematics updated, the
                   vehicle (if any) senses, navigates and sets its thrusters

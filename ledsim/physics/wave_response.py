@@ -37,8 +37,9 @@ def free_hull_response(period: float, depth: float, heading: float, height: floa
     thirds of ``seconds``."""
     from ledsim.physics.disturbances import parse_disturbance
     from ledsim.physics.scene import WorldConfig
-    from ledsim.physics.tick import advance, prepare
+    from ledsim.physics.tick import prepare
     from ledsim.physics.world import LinkWorld
+    from ledsim.physics.world_rows import WorldRows
     from ledsim.radiometry.link_presets import link_constants
 
     c = link_constants(link, 30.0)
@@ -48,8 +49,10 @@ def free_hull_response(period: float, depth: float, heading: float, height: floa
     n = int(round(seconds / c.Te))
     pos, pitch = np.empty((n, 3)), np.empty(n)
     prepare(world, [waves], 0.0)
+    rows = WorldRows([world])  # the world as a row of one: the one tick
+    rows.start(None, [[waves]], [None])
     for k in range(n):
-        advance(world, [waves], 0.0, (k + 1) * c.Te)
+        rows.tick((k + 1) * c.Te, torques=(0.0,))
         pos[k] = world.hull_pos
         pitch[k] = -math.asin(max(-1.0, min(1.0, float(world.hull_rotation[2, 0]))))
     t = np.arange(1, n + 1) * c.Te

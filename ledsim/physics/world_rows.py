@@ -8,6 +8,13 @@ commanded, :meth:`WorldRows.tick` steps every world's physics in one pass (split
 threads: :class:`~ledsim.physics.tick.PhysicsPass`), prepares each world's next
 control step, and lets the vehicles act in one pass over their rows (the vehicles of
 all rows stacked as one). A row's numbers do not depend on the others beside it.
+
+It is the one way worlds move, shaped like ``mujoco.rollout`` (rows started, read, and
+ticked with their torques): the closed loop of one seed or many, the native vector
+env, the single env, :func:`~ledsim.physics.simulation.simulate` and the wave response
+all tick their worlds here (one world is a row of one, whose vehicle is its own, not a
+copy). A row's torque is a float for a gimbal of one axis, an array over the axes
+(shape (n_axes,)) for more.
 """
 
 from __future__ import annotations
@@ -39,15 +46,17 @@ class WorldRows:
         self.vehicles = None  # the rows' vehicles as one (Vehicle.stacked), or None
         self._physics: PhysicsPass | None = None
 
-    def start(self, sensors: Sequence[IrradianceSensor], disturbances: Sequence[list],
-              vehicles: Sequence) -> list:
-        """Every row started anew (each world already reset by its owner): its sensor,
-        disturbances and vehicle (None: none). Returns each row's vehicle as the row of
-        the stacked vehicles that it now is (or None)."""
-        self.sensors = SensorRows(sensors)
+    def start(self, sensors: Sequence[IrradianceSensor] | None,
+              disturbances: Sequence[list], vehicles: Sequence) -> list:
+        """Every row started anew (each world already reset by its owner): its sensor
+        (None: rows nobody reads), disturbances and vehicle (None: none). Returns each
+        row's vehicle as the row of the stacked vehicles that it now is (or None)."""
+        self.sensors = None if sensors is None else SensorRows(sensors)
         self.disturbances = list(disturbances)
         self.vehicles = None
-        if vehicles and vehicles[0] is not None:
+        if len(vehicles) == 1:  # a vehicle is a stack of one already: no copy
+            self.vehicles = vehicles[0]
+        elif vehicles and vehicles[0] is not None:
             self.vehicles = type(vehicles[0]).stacked(list(vehicles))
         return [self.vehicle(i) for i in range(len(self.worlds))]
 
@@ -55,13 +64,18 @@ class WorldRows:
         """Row ``i`` started anew (its world restarted); returns its vehicle's row."""
         self.sensors.sensors[i] = sensor
         self.disturbances[i] = disturbances
-        if self.vehicles is not None:
+        if len(self.worlds) == 1:
+            self.vehicles = vehicle
+        elif self.vehicles is not None:
             self.vehicles.put(i, vehicle)
         return self.vehicle(i)
 
     def vehicle(self, i: int):
-        """Row ``i``'s vehicle, a row of the stacked vehicles (None: no vehicles)."""
-        return None if self.vehicles is None else self.vehicles.row(i)
+        """Row ``i``'s vehicle, a row of the stacked vehicles (None: no vehicles; the
+        vehicle itself for a row of one)."""
+        if self.vehicles is None or len(self.worlds) == 1:
+            return self.vehicles
+        return self.vehicles.row(i)
 
     def read(self) -> list[SensorReading]:
         """Every row's sensor, in one pass."""
@@ -75,7 +89,8 @@ class WorldRows:
         applied (None when none were given)."""
         applied = None
         if torques is not None:
-            applied = [w.set_torque(t) for w, t in zip(self.worlds, torques, strict=True)]
+            applied = [w.set_torques(t) if isinstance(t, np.ndarray) else w.set_torque(t)
+                       for w, t in zip(self.worlds, torques, strict=True)]
         if self._physics is None:
             self._physics = PhysicsPass(self.worlds, self.threads)
         n = len(self.worlds)

@@ -1,0 +1,61 @@
+"""The gimbal's axes in the agent: one number per axis, a float for the paper's one.
+
+Every angle, rate, input u and torque the agent handles is a value over the layout's
+axes (:attr:`~ledsim.physics.layout.ReceiverLayout.axes`): an array of shape
+(n_axes,), and for the paper's one axis a float, which is the same array of one at a
+fraction of its cost (numpy spends about a microsecond on each operation of a small
+array; the step makes dozens). The helpers here take either, and give back the kind
+they were given, so each law, motor and slew is written once for both.
+
+An estimate over n axes is the state (angle_1 .. angle_n, rate_1 .. rate_n): the paper's
+(phi, phidot) for n = 1, and (azimuth, elevation, their rates) for a pan-tilt head.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+__all__ = ["angles_rates", "as_axes", "clip", "magnitude", "n_axes_of"]
+
+
+def clip(x, lo, hi):
+    """``x`` within [lo, hi]: a float for a float (``min``/``max``, as the paper's one
+    axis always did, to the last bit), else ``np.clip`` over the axes."""
+    if isinstance(x, np.ndarray):
+        return np.clip(x, lo, hi)
+    return min(max(x, lo), hi)
+
+
+def magnitude(x) -> float:
+    """The largest |x| over the axes [the value's unit] (|x| for one axis)."""
+    return float(np.max(np.abs(x))) if isinstance(x, np.ndarray) else abs(float(x))
+
+
+def angles_rates(xhat):
+    """An estimate's angles and rates: ``(xhat[0], xhat[1])`` for one axis (numpy
+    floats), else the two halves ``(xhat[:n], xhat[n:])``, each shape (n,)."""
+    if len(xhat) == 2:
+        return xhat[0], xhat[1]
+    n = len(xhat) // 2
+    return xhat[:n], xhat[n:]
+
+
+def n_axes_of(value) -> int:
+    """How many axes a value covers (1 for a float)."""
+    return int(np.size(value))
+
+
+def as_axes(value, n: int):
+    """``value`` over ``n`` axes: a float for one axis, else an array of shape (n,) (a
+    float is broadcast to every axis). Raises ``ValueError`` naming a wrong length."""
+    if n == 1:
+        a = np.asarray(value, dtype=float).reshape(-1)
+        if a.size != 1:
+            raise ValueError(f"{value!r} has {a.size} values for a gimbal of one axis")
+        return float(a[0])
+    a = np.broadcast_to(np.asarray(value, dtype=float), (n,)) if np.ndim(value) == 0 \
+        else np.asarray(value, dtype=float)
+    if a.shape != (n,):
+        raise ValueError(f"{value!r} has shape {a.shape} for a gimbal of {n} axes: "
+                         f"give one per axis, shape ({n},)")
+    return a.copy()
