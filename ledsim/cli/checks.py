@@ -1,5 +1,6 @@
 """Checks and notes a command makes before it runs: the vehicle's flags and scene, a
-distance the shipped KKL does not serve, and a receiver that saturates."""
+distance the shipped KKL does not serve, a receiver that saturates, and an LED out of
+the one-axis gimbal's plane."""
 
 from __future__ import annotations
 
@@ -56,6 +57,7 @@ def _warn_unserved(cfg) -> None:
     from ledsim.loop.registry import PHYSICS_SCENARIOS
 
     _warn_saturated(cfg)
+    _warn_out_of_plane(cfg)
 
     if not served(cfg):
         lo, hi = SERVED_DISTANCES
@@ -66,3 +68,40 @@ def _warn_unserved(cfg) -> None:
             PHYSICS_SCENARIOS[cfg.scenario].law.tracks_beam and not cfg.fast_acquisition:
         log.warning("the link is too weak for the minimum-time acquisition's fix (peak "
                     "SNR under 3.5): this run acquires with the warm-up")
+
+
+#: How far out of the gimbal's plane [deg] the LED may stand before a run says so.
+OUT_OF_PLANE_NOTE = 5.0
+
+
+def _warn_out_of_plane(cfg) -> None:
+    """Say so when the LED stands more than :data:`OUT_OF_PLANE_NOTE` out of the yaw
+    gimbal's plane (a ``--transmitter-depth`` unlike ``--depth``), with what it costs:
+    the receiver's cone response at that elevation, which no pan angle recovers (the
+    pointing loss of a perfect aim), and whether that leaves the availability any
+    chance (P1 within ``AVAILABILITY_LEVEL`` of the geometry's best)."""
+    import math
+
+    from ledsim.loop.run_metrics import AVAILABILITY_LEVEL
+    from ledsim.radiometry.optics import receiver_response
+
+    if cfg.transmitter_depth is None:
+        return
+    c = cfg.world_config().constants
+    if c.link is None:  # the bench measures only about the hinge
+        return
+    rise = cfg.depth - cfg.transmitter_depth  # the LED above the receiver [m]
+    elevation = math.asin(max(-1.0, min(1.0, rise / cfg.distance)))
+    if abs(math.degrees(elevation)) <= OUT_OF_PLANE_NOTE:
+        return
+    g = float(receiver_response(elevation, c.receiver) / receiver_response(0.0, c.receiver))
+    loss = -10.0 * math.log10(max(g, 1e-300))
+    floor = -10.0 * math.log10(AVAILABILITY_LEVEL)
+    verdict = (f", more than the {floor:.2f} dB the availability allows (P1 within "
+               f"{AVAILABILITY_LEVEL:.0%} of the best): expect an availability near 0"
+               if loss > floor else "")
+    log.warning(f"the LED stands {abs(math.degrees(elevation)):.1f} deg "
+                f"{'above' if rise > 0 else 'below'} the yaw gimbal's plane "
+                f"(--transmitter-depth {cfg.transmitter_depth:g} m, --depth {cfg.depth:g} m, "
+                f"{cfg.distance:g} m apart), which the one-axis gimbal cannot turn to: "
+                f"{loss:.2f} dB of pointing loss however well it aims{verdict}")
