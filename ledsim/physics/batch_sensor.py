@@ -119,6 +119,9 @@ class BatchSensor:
         normal = b.photodiode_normal
         axis = b.led_axis[:, None, :]
         hinge = b.hinge_axis[:, None, :]
+        if self.constants.layout.tilted:  # each photodiode's own up (incidence.py)
+            hinge = hinge - dot3(hinge, normal)[..., None] * normal
+            hinge = hinge / np.sqrt(dot3(hinge, hinge))[..., None]
         phi = np.arctan2(dot3(cross3(normal, u), hinge), dot3(normal, u))
         theta = np.arccos(np.clip(-dot3(axis, u), -1.0, 1.0))
         rays = self.needs_rays()

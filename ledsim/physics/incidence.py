@@ -35,6 +35,21 @@ def incidence_geometry(o, led, axis, hinge, photodiode, normal):
     return d, theta, phi
 
 
+def photodiode_up(o, normal, hinge):
+    """The unit "up" of a photodiode on a tilting head: the pan hinge's axis less its
+    part along the photodiode's normal. The photodiode's azimuth is about it
+    (:func:`incidence_geometry` with it as the hinge) and its elevation is the line of
+    sight's angle out of the plane normal to it. On a head that only pans, the normals
+    lie in the turning plane and it is the hinge axis itself (which the one-axis paths
+    pass as it is, to the last bit)."""
+    nx, ny, nz = normal
+    hx, hy, hz = hinge
+    k = hx * nx + hy * ny + hz * nz
+    ux, uy, uz = hx - k * nx, hy - k * ny, hz - k * nz
+    m = o.sqrt(ux * ux + uy * uy + uz * uz)
+    return ux / m, uy / m, uz / m
+
+
 def incidence_rate(sight, velocity, transmitter, hinge):
     """d(phi)/dt [rad/s] of a photodiode: the line of sight's rotation minus the
     photodiode's, about the hinge axis (exact for rotations about that axis).

@@ -111,6 +111,13 @@ class ReceiverLayout:
         return len(self.axes)
 
     @property
+    def tilted(self) -> bool:
+        """A photodiode's normal can leave the pan plane (a tilt offset, or a tilt axis
+        that turns the head): each photodiode's azimuth and elevation are then about
+        its own up (:func:`~ledsim.physics.incidence.photodiode_up`)."""
+        return self.n_axes > 1 or any(p.tilt for p in self.photodiodes)
+
+    @property
     def n_state(self) -> int:
         """An angle and a rate per axis."""
         return 2 * self.n_axes

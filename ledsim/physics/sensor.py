@@ -20,7 +20,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from ledsim.physics.incidence import incidence_geometry, incidence_rate
+from ledsim.physics.incidence import incidence_geometry, incidence_rate, photodiode_up
 from ledsim.physics.world import LinkWorld, WorldError
 from ledsim.radiometry.optics import (
     received_power,
@@ -94,6 +94,7 @@ class IrradianceSensor:
         self.layout = self.constants.layout
         self._photodiodes = range(self.layout.n_photodiodes)
         self._reference = self.layout.reference
+        self._tilted = self.layout.tilted
         n = world.config.n_rays
         ring = max(n - 1, 0)
         angles = 2 * np.pi * np.arange(ring) / max(ring, 1)
@@ -158,9 +159,9 @@ class IrradianceSensor:
         targets = self.aperture_points()
         dist, theta, phi, vis = [], [], [], []
         for i in self._photodiodes:
-            d, t, p = incidence_geometry(FLOATS, led, axis, hinge,
-                                         w.photodiode_pos(i).tolist(),
-                                         w.photodiode_normal(i).tolist())
+            normal = w.photodiode_normal(i).tolist()
+            d, t, p = incidence_geometry(FLOATS, led, axis, self._up(normal, hinge),
+                                         w.photodiode_pos(i).tolist(), normal)
             dist.append(d)
             theta.append(t)
             phi.append(p)
@@ -206,14 +207,22 @@ class IrradianceSensor:
             power = power + self.world.light_noise
         return power
 
+    def _up(self, normal: list, hinge: list) -> list:
+        """The axis a photodiode's azimuth is about: the hinge's, or on a tilted head
+        the photodiode's own up (:func:`~ledsim.physics.incidence.photodiode_up`)."""
+        return list(photodiode_up(FLOATS, normal, hinge)) if self._tilted else hinge
+
     def elevation(self) -> np.ndarray:
         """Each photodiode's LED elevation out of its turning plane [rad]: the angle
         between the line of sight and the plane normal to the hinge axis, which a
-        one-axis gimbal cannot turn to."""
+        one-axis gimbal cannot turn to (on a tilted head, the plane normal to the
+        photodiode's own up: its elevation, which the tilt turns)."""
         w = self.world
         h = w.hinge_axis
         out = []
         for i in self._photodiodes:
+            if self._tilted:
+                h = np.array(self._up(w.photodiode_normal(i).tolist(), w.hinge_axis.tolist()))
             v = w.led_pos - w.photodiode_pos(i)
             out.append(math.asin(max(-1.0, min(1.0, float(v @ h) / math.sqrt(float(v @ v))))))
         return np.array(out)

@@ -21,7 +21,7 @@ import numpy as np
 
 from ledsim.physics.batch import WorldPoses
 from ledsim.physics.batch_sensor import needs_rays
-from ledsim.physics.incidence import incidence_geometry, incidence_rate
+from ledsim.physics.incidence import incidence_geometry, incidence_rate, photodiode_up
 from ledsim.physics.sensor import IrradianceSensor, SensorReading
 from observer.rowops import ARRAYS
 
@@ -47,6 +47,7 @@ class SensorRows:
         s0 = self.sensors[0]
         self.constants = s0.constants
         self.reference = s0.layout.reference
+        self._tilted = s0.layout.tilted
         self._radius = self.worlds[0].config.aperture_radius
         self._velocity = np.empty((len(self.sensors), 6))
         w0 = self.worlds[0]
@@ -63,8 +64,9 @@ class SensorRows:
         rays = needs_rays(p, self._radius)
         columns = []  # (d, theta, phi, visible fraction) of each photodiode, (N,) each
         for i in range(p.n_photodiodes):
-            d, theta, phi = incidence_geometry(o, led, axis, hinge, pds[:, i].T,
-                                               normals[:, i].T)
+            normal = normals[:, i].T
+            up = photodiode_up(o, normal, hinge) if self._tilted else hinge
+            d, theta, phi = incidence_geometry(o, led, axis, up, pds[:, i].T, normal)
             vis = np.ones(len(self.worlds))
             for n in np.flatnonzero(rays[:, i]).tolist():
                 s = self.sensors[n]
