@@ -120,10 +120,11 @@ def test_a_double_dash_given_as_a_value_is_that_value(tmp_path, flag, needle):
 @pytest.mark.parametrize("args,needle", [
     # the receiver's peak SNR 1e-158: the supervisor's noise prior overflowed
     (["--link", "luma", "--attenuation", "16"], "leaves the receiver in the dark"),
-    # the LED 3 m under a receiver 1 m deep, the seabed 2.5 m under it: no line of sight,
-    # found in the run's first step
-    (["--link", "luma", "--depth", "1", "--transmitter-depth", "4"], "under the scene's "
-     "seabed 2.5 m below it"),
+    # the LED 3 m under a receiver 1 m deep stood under the scene's seabed (found in the
+    # run's first step); the seabed now follows the deeper end, and a --sea-depth above
+    # an end is refused
+    (["--link", "luma", "--depth", "1", "--transmitter-depth", "4", "--sea-depth", "3"],
+     "--sea-depth 3.0 is not allowed"),
 ])
 def test_a_link_no_run_can_use_is_refused_before_it_starts(tmp_path, args, needle):
     """Found by the CLI fuzz running for real; both were failures inside the run."""

@@ -51,7 +51,7 @@ def simulate(args) -> int:
                              args.torque_frequency)
     disturbances = [parse_disturbance(d) for d in args.disturbance]
     check_timing(disturbances, args.seconds)
-    check_sea(disturbances, args.depth, args.transmitter_depth)
+    check_sea(disturbances, args.depth, args.transmitter_depth, args.sea_depth)
     from ledsim.radiometry.link_presets import link_constants
 
     args.distance = resolved_distance(args)
@@ -63,7 +63,8 @@ def simulate(args) -> int:
                                   led_yaw=math.radians(args.led_yaw),
                                   led_lateral_offset=args.led_offset, depth=args.depth,
                                   transmitter_depth=args.transmitter_depth,
-                                  receiver_dome=args.receiver_dome, **extra))
+                                  receiver_dome=args.receiver_dome,
+                                  sea_depth=args.sea_depth, **extra))
     world.reset(gimbal_angle=args.gimbal_angle)
     sensor = IrradianceSensor(world, seed=args.seed)
     t0 = time.perf_counter()

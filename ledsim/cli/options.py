@@ -35,6 +35,7 @@ ATTENUATION = number(0.0, 100.0, "1/m")
 BIT_RATE = number(MIN_BIT_RATE, 1e10, "bit/s")
 DEPTH = number(1.0, 500.0, "m")
 TRANSMITTER_DEPTH = number(0.2, 500.0, "m")
+SEA_DEPTH = number(1.5, 11000.0, "m")  # the run checks it against both ends
 SECONDS = number(0.0, 3600.0, "s", lo_open=True)
 SEED = number(0, 2**32 - 1, integer=True)
 SEEDS = number(1, 10_000, integer=True)

@@ -64,6 +64,7 @@ def flags() -> dict[str, Flag]:
         DISTANCE,
         NOISE_SCALE,
         PARTICLES,
+        SEA_DEPTH,
         SECONDS,
         SEEDS,
         TORQUE_LIMIT,
@@ -100,6 +101,9 @@ def flags() -> dict[str, Flag]:
                       metavar="D"),
         "transmitter_depth": Flag("the LED's depth [m] (default: the receiver's)",
                                   TRANSMITTER_DEPTH, metavar="D"),
+        "sea_depth": Flag("the sea's depth [m]: the seabed stands there, at least 0.5 m "
+                          "below both ends (default: 2.5 m under the deeper end; also the "
+                          "waves' depth when they name none)", SEA_DEPTH, metavar="H"),
         "receiver_dome": Flag("the receiver's head turns inside a dome, out of the water's "
                               "flow (default: open to it, as on the paper's bench)",
                               form="on"),

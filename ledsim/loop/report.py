@@ -138,6 +138,7 @@ class RunSummary(DictAccess):
     false_loss_events: Stat | None = None
     reseeds: Stat | None = None
     spec: dict | None = None
+    sea_depth: float | None = None
 
 
 #: The per-window metrics a summary gives over the seeds (:class:`WindowMetrics`).
@@ -208,7 +209,7 @@ def summarize(cfg: RunConfig, outs: list[RunOutcome]) -> RunSummary:
         receiver_dome=cfg.receiver_dome,
         loss_events=stat(lambda o: o.metrics.loss_events),
         false_loss_events=stat(lambda o: o.metrics.false_loss_events),
-        reseeds=stat(lambda o: o.metrics.reseeds), spec=cfg.flat())
+        reseeds=stat(lambda o: o.metrics.reseeds), spec=cfg.flat(), sea_depth=cfg.sea_depth)
 
 
 #: The most seeds one job steps together (a batch): larger batches gain little more

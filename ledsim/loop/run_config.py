@@ -58,6 +58,7 @@ class WorldPart:
         transmitter_depth: the LED's depth [m] (None: the receiver's).
         receiver_dome: the receiver's head turns inside a dome, out of the water's flow
             (``--receiver-dome``).
+        sea_depth: the sea's depth [m], where the seabed stands (None: below both ends).
     """
 
     distance: float | None = None
@@ -75,6 +76,7 @@ class WorldPart:
     depth: float = DEFAULT_DEPTH
     transmitter_depth: float | None = None
     receiver_dome: bool = False
+    sea_depth: float | None = None
 
     def __post_init__(self) -> None:
         if self.distance is None:  # the link preset's (0.085 m on the paper's bench)
@@ -97,7 +99,7 @@ class WorldPart:
                                                     self.attenuation),
                            torque_limit=self.torque_limit, integrator=self.integrator,
                            depth=self.depth, transmitter_depth=self.transmitter_depth,
-                           receiver_dome=self.receiver_dome,
+                           receiver_dome=self.receiver_dome, sea_depth=self.sea_depth,
                            **extra)
 
 

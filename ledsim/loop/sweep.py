@@ -71,7 +71,7 @@ def split_disturbance(cell: str) -> tuple[str, ...]:
 #: folder of the paper's bench from before them resumes.
 _LINK_DEFAULTS = {"link": "paper", "water": None, "attenuation": None, "bit_rate": None,
                   "depth": DEFAULT_DEPTH, "transmitter_depth": None,
-                  "receiver_dome": False}
+                  "receiver_dome": False, "sea_depth": None}
 
 
 @dataclass(frozen=True)

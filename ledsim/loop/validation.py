@@ -31,7 +31,8 @@ from ledsim.loop.registry import (
     peak_snr,
 )
 from ledsim.physics.disturbances import check_sea, check_timing, parse_disturbance
-from ledsim.physics.scene import WorldConfig, WorldError, transmitter_rise
+from ledsim.physics.scene import WorldConfig, transmitter_rise
+from ledsim.physics.sea_scene import seabed_check
 from ledsim.radiometry.link_presets import LINK_PRESETS, preset_named
 from ledsim.radiometry.water import WATER_TYPES
 
@@ -121,13 +122,16 @@ def validate_run(cfg) -> None:
     check_ranges(checks)
     transmitter_rise(cfg.depth, cfg.transmitter_depth, cfg.distance,
                      ("--depth", "--transmitter-depth"))
+    if cfg.sea_depth is not None:
+        check_ranges([seabed_check(cfg.sea_depth, cfg.depth, cfg.transmitter_depth,
+                                   ("--sea-depth", "--depth", "--transmitter-depth"))])
     disturbances = [parse_disturbance(d) for d in cfg.disturbances]
     if not preset.has_receiver_hardware:
         for d in disturbances:
             if getattr(d, "needs_receiver", False):
                 raise LedsimError(d.NO_RECEIVER)
     check_timing(disturbances, cfg.run_seconds)
-    check_sea(disturbances, cfg.depth, cfg.transmitter_depth)
+    check_sea(disturbances, cfg.depth, cfg.transmitter_depth, cfg.sea_depth)
     if cfg.window is not None and cfg.window > cfg.run_seconds:
         length = "--seconds" if cfg.seconds is not None else \
             f"the {cfg.scenario} scenario's length; --seconds sets it"
@@ -151,30 +155,18 @@ def validate_run(cfg) -> None:
 @functools.lru_cache(maxsize=32)
 def check_world(config: WorldConfig):
     """Build the world of ``config`` once and look for the LED from each photodiode: a
-    scene that cannot be built, or an LED that no photodiode can see (behind the
-    receiver, or under the scene's seabed), is refused before any run starts rather
-    than in its first step. Raises :class:`~ledsim.physics.scene.WorldError`. Returns
+    scene that cannot be built, or an LED that a photodiode cannot see whole (behind the
+    receiver, or a beam that the seabed or the hull cuts, grazing included: the error
+    names what cuts it), is refused before any run starts rather than in its first
+    step. Raises :class:`~ledsim.physics.scene.WorldError`. Returns
     the scene's ids (:class:`~ledsim.physics.scene_ids.SceneIds`: which of the vehicle's
     sensors it has), cached with the check."""
-    import mujoco
 
     from ledsim.physics.sensor import IrradianceSensor
     from ledsim.physics.world import LinkWorld
 
     world = LinkWorld(config)
-    try:
-        IrradianceSensor(world, noise=False)
-    except WorldError:
-        bed = mujoco.mj_name2id(world.model, mujoco.mjtObj.mjOBJ_GEOM, "seabed")
-        floor = float(world.model.geom_pos[bed][2]) if bed >= 0 else -math.inf
-        if config.transmitter_depth is None or world.led_pos[2] > floor:
-            raise
-        hull = float(world.initial_hull_pos[2])
-        raise WorldError(f"--transmitter-depth {config.transmitter_depth:g} m puts the LED "
-                         f"{hull - world.led_pos[2]:.3g} m below the receiver at --depth "
-                         f"{config.depth:g} m, under the scene's seabed {hull - floor:g} m "
-                         f"below it: the LED must be less than {hull - floor:g} m deeper "
-                         "than the receiver") from None
+    IrradianceSensor(world, noise=False)
     return world.ids
 
 

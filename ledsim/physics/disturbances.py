@@ -262,10 +262,12 @@ def check_timing(disturbances, seconds: float) -> None:
                                    f"after the end of the {seconds:g} s run")
 
 
-def check_sea(disturbances, depth: float, transmitter_depth: float | None = None) -> None:
+def check_sea(disturbances, depth: float, transmitter_depth: float | None = None,
+              sea_depth: float | None = None) -> None:
     """Refuse waves the run's vehicles cannot be in (:meth:`Waves.check_sea`): their
     trough must pass over the receiver at ``depth`` [m] and the LED at
-    ``transmitter_depth`` [m] (None: the receiver's), with room for their size."""
+    ``transmitter_depth`` [m] (None: the receiver's), with room for their size, and they
+    must stand in a sea ``sea_depth`` [m] deep (None: their own, else deep water)."""
     for d in disturbances:
         if isinstance(d, Waves):
-            d.check_sea(depth, transmitter_depth)
+            d.check_sea(depth, transmitter_depth, sea_depth)

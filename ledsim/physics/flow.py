@@ -161,15 +161,21 @@ class Waves(Disturbance):
             f"{length:.3g} m): at this period the height is at most "
             f"{limit * length:.3g} m")
 
-    def check_sea(self, depth: float, transmitter_depth: float | None = None) -> None:
+    def check_sea(self, depth: float, transmitter_depth: float | None = None,
+                  sea_depth: float | None = None) -> None:
         """Refuse a sea the run's vehicles cannot be in: the trough, H/2 below the still
         surface, must pass :data:`HULL_CLEARANCE` [m] over the receiver vehicle (at
         ``depth`` [m], the run's ``--depth``, unless the waves' own ``depth`` says
         otherwise) and :data:`LED_CLEARANCE` [m] over the LED (``transmitter_depth``
         [m]; None: level with the receiver), and the seabed (``sea_depth``) must lie
-        below both. Raises :class:`DisturbanceError` naming the limit."""
-        if self._checked == (depth, transmitter_depth):
+        below both. The run's ``sea_depth`` [m] (the world's; None: none given) is the
+        waves' own where they name none, and their steepness is checked over it. Raises
+        :class:`DisturbanceError` naming the limit."""
+        if self._checked == (depth, transmitter_depth, sea_depth):
             return
+        if sea_depth is not None and not self.sea_depth:
+            self.sea_depth = sea_depth  # one sea: the world's depth is the waves' too
+            self._check_steepness()
         rise = 0.0 if transmitter_depth is None else depth - transmitter_depth
         if self.depth is None:
             vehicle = (depth, f"--depth {depth:g} m")
@@ -191,7 +197,7 @@ class Waves(Disturbance):
                     f"the still surface, too near {what} at {where}: the trough must stay "
                     f"{clearance:g} m above it ({top} {clearance:g} m above its centre), "
                     f"so the height is at most {max(0.0, 2 * (z - clearance)):.3g} m here")
-        self._checked = (depth, transmitter_depth)
+        self._checked = (depth, transmitter_depth, sea_depth)
 
     @property
     def wave(self) -> RegularWave:
@@ -214,7 +220,8 @@ class Waves(Disturbance):
         return 0 if world.config.constants.link is None else StripCoefficients().strips
 
     def apply(self, world: LinkWorld, t: float) -> None:
-        self.check_sea(world.config.depth, world.config.transmitter_depth)
+        self.check_sea(world.config.depth, world.config.transmitter_depth,
+                       world.config.sea_depth)
         depth = world.config.depth if self.depth is None else self.depth
         n = self.strips_in(world)
         if n == 0:

@@ -19,7 +19,7 @@ from ledsim.constants import MIN_DISTANCE, ConfigError, LinkConstants
 from ledsim.errors import LedsimError, check_ranges
 from ledsim.files.resources import scene_path
 from ledsim.physics.head import build_head, receiver_centre
-from ledsim.physics.sea_scene import apply_sea
+from ledsim.physics.sea_scene import apply_sea, place_seabed, seabed_check
 
 #: Former module-level name of the default scene.
 SCENE = scene_path()
@@ -74,6 +74,10 @@ class WorldConfig:
         receiver_dome: the receiver's head turns inside a dome (a window over the
             gimbal): the water's flow puts no torque on it. False: the head is open to
             the water, as on the paper's bench (docs/sea.md measures both).
+        sea_depth: the sea's depth under the still surface [m]: the seabed stands
+            there, at least :data:`~ledsim.physics.sea_scene.SEABED_CLEARANCE` below
+            both ends (None: the scene's seabed, 2.5 m under the receiver, and as far
+            under the LED where the LED is deeper).
     """
 
     constants: LinkConstants = field(default_factory=LinkConstants)
@@ -93,6 +97,7 @@ class WorldConfig:
     depth: float = DEFAULT_DEPTH
     transmitter_depth: float | None = None
     receiver_dome: bool = False
+    sea_depth: float | None = None
 
     def __post_init__(self):
         if self.integrator not in INTEGRATORS:
@@ -119,6 +124,8 @@ class WorldConfig:
                            0.2 <= self.transmitter_depth <= 500.0, "in [0.2, 500] m"))
         if self.hull_mass is not None:
             checks.append(("hull_mass", self.hull_mass, self.hull_mass > 0, "> 0 kg"))
+        if self.sea_depth is not None:
+            checks.append(seabed_check(self.sea_depth, self.depth, self.transmitter_depth))
         check_ranges(checks, ConfigError, "=")
         ratio = self.constants.Te / self.timestep
         if abs(ratio - round(ratio)) > 1e-9:
@@ -188,6 +195,7 @@ def build_spec(config: WorldConfig) -> mujoco.MjSpec:
     tx.pos = [centre[0] + ahead, centre[1] + config.led_lateral_offset, centre[2] + rise]
     if config.receiver_dome:  # the head turns in still water behind a window
         spec.geom("gimbal_housing").fluid_ellipsoid = 0.0
+    place_seabed(spec, config.sea_depth, config.depth, rise, WorldError)
     if c.link is not None:  # metres of water: a docking station, fog, a wider view
         apply_sea(spec, c.link.water_at_led.attenuation, centre, np.asarray(tx.pos),
                   config.depth)

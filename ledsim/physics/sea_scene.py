@@ -17,6 +17,44 @@ FOG_CONTRASTS = 3.0
 OCCLUDER_PER_METRE = 0.01
 
 
+#: How far the seabed must lie below the deeper end of the link [m]: room for the hull
+#: (its keel and fin, 0.3 m below its centre) and the LED's docking station.
+SEABED_CLEARANCE = 0.5
+#: The deepest sea [m] (the Challenger Deep).
+DEEPEST_SEA = 11000.0
+
+
+def seabed_check(sea_depth: float, depth: float, transmitter_depth: float | None,
+                 names: tuple[str, str, str] = ("sea_depth", "depth", "transmitter_depth")):
+    """The range check (:func:`~ledsim.errors.check_ranges`' row) of a ``sea_depth`` [m]:
+    deeper than both ends (the receiver at ``depth``, the LED at ``transmitter_depth``,
+    None: level) by :data:`SEABED_CLEARANCE`; ``names``: what the message calls them."""
+    deepest = max(depth, depth if transmitter_depth is None else transmitter_depth)
+    least = deepest + SEABED_CLEARANCE
+    where = f"{names[1]} {depth:g} m" if transmitter_depth is None else \
+        f"{names[1]} {depth:g} m, {names[2]} {transmitter_depth:g} m"
+    return (names[0], sea_depth, least <= sea_depth <= DEEPEST_SEA,
+            f"in [{least:g}, {DEEPEST_SEA:g}] m: the seabed lies at least "
+            f"{SEABED_CLEARANCE:g} m below both ends ({where})")
+
+
+def place_seabed(spec: mujoco.MjSpec, sea_depth: float | None, depth: float, rise: float,
+                 error: type[Exception]) -> None:
+    """Put the scene's ``seabed`` geom at ``sea_depth`` [m] under the still surface (the
+    receiver at ``depth`` [m], its hull at world z = 0), or, with None, keep the scene's
+    seabed under the receiver and lower it by as much as the LED stands below the
+    receiver (``rise`` [m] < 0), so that the LED can stand anywhere in the water. A
+    scene without a seabed is left as it is, unless ``sea_depth`` asks for one
+    (``error``, naming the scene's missing geom)."""
+    bed = spec.geom("seabed")
+    if bed is None:
+        if sea_depth is not None:
+            raise error("sea_depth needs a geom named 'seabed' in the scene, which has none")
+        return
+    x, y, z = (float(v) for v in bed.pos)
+    bed.pos = [x, y, depth - sea_depth if sea_depth is not None else z + min(0.0, rise)]
+
+
 def _look_at(eye: np.ndarray, target: np.ndarray) -> list[float]:
     """MJCF ``xyaxes`` of a camera at ``eye`` looking at ``target``, level horizon."""
     forward = target - eye

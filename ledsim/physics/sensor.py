@@ -18,10 +18,11 @@ from __future__ import annotations
 import math
 from dataclasses import dataclass
 
+import mujoco
 import numpy as np
 
 from ledsim.physics.incidence import incidence_geometry, incidence_rate, photodiode_up
-from ledsim.physics.world import LinkWorld, WorldError
+from ledsim.physics.world import RAY_GROUPS, LinkWorld, WorldError
 from ledsim.radiometry.optics import (
     received_power,
     receiver_response_at,
@@ -120,9 +121,41 @@ class IrradianceSensor:
                 raise WorldError(f"LED at {led} m faces away from {name} "
                                  f"(emission angle {reading.emission_angle[i]:.2f} rad): no "
                                  "line of sight")
-            if reading.visible_fraction[i] == 0:
-                raise WorldError(f"LED at {led} m is hidden from {name} by the "
-                                 "scene: no line of sight")
+            if reading.visible_fraction[i] < 1:  # grazing too: the scene cuts the beam
+                hidden = "hidden" if reading.visible_fraction[i] == 0 else \
+                    f"{1 - reading.visible_fraction[i]:.0%} hidden"
+                raise WorldError(f"the LED, {self._led_depth():g} m deep, is {hidden} from "
+                                 f"{name} by {self._blocker(i)}: no clear line of sight")
+
+    def _led_depth(self) -> float:
+        """The LED's depth under the still surface [m]."""
+        w = self.world
+        return round(float(w.initial_hull_pos[2] + w.config.depth - w.led_pos[2]), 3)
+
+    def _blocker(self, i: int) -> str:
+        """What in the scene cuts a ray from photodiode ``i`` to the LED's aperture: the
+        seabed, the receiver's hull, or the scene's geom by name."""
+        w = self.world
+        m, origin = w.model, w.photodiode_pos(i)
+        geom = np.zeros(1, dtype=np.int32)
+        for point in self.aperture_points():
+            ray = point - origin
+            length = float(np.linalg.norm(ray))
+            hit = mujoco.mj_ray(m, w.data, origin, ray / length, RAY_GROUPS, 1,
+                                w.ids.gimbal_body, geom)
+            if 0.0 <= hit < length:
+                break
+        else:
+            return "the scene"
+        name = mujoco.mj_id2name(m, mujoco.mjtObj.mjOBJ_GEOM, int(geom[0])) or ""
+        body = int(m.geom_bodyid[geom[0]])
+        if name == "seabed":
+            return "the seabed (sea_depth, or 2.5 m under the deeper end by default)"
+        if body == w.ids.hull_body or int(m.body_rootid[body]) == \
+                int(m.body_rootid[w.ids.hull_body]):
+            return "the receiver's own vehicle (its hull stands in the beam)"
+        label = name or mujoco.mj_id2name(m, mujoco.mjtObj.mjOBJ_BODY, body) or f"#{body}"
+        return f"the scene's {label!r}"
 
     def aperture_points(self) -> np.ndarray:
         """World positions of the aperture sample points, shape (n_rays, 3)."""
