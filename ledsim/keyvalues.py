@@ -7,11 +7,13 @@ from collections.abc import Iterable
 
 
 def parse_key_values(items: Iterable[str], allowed: Iterable[str], what: str,
-                     error: type[Exception], integers: Iterable[str] = ()) -> dict:
-    """``{key: number}`` from ``key=value`` items; keys in ``integers`` are ints, the rest
-    floats. A missing ``=``, a key not in ``allowed``, a key given twice or a value that
-    is not a number raises ``error`` naming ``what`` (for example ``"current"``)."""
-    allowed, integers = list(allowed), set(integers)
+                     error: type[Exception], integers: Iterable[str] = (),
+                     choices: dict[str, tuple[str, ...]] | None = None) -> dict:
+    """``{key: number}`` from ``key=value`` items; keys in ``integers`` are ints, keys in
+    ``choices`` one of their words, the rest floats. A missing ``=``, a key not in
+    ``allowed``, a key given twice or a value that is not a number (or not one of the
+    key's words) raises ``error`` naming ``what`` (for example ``"current"``)."""
+    allowed, integers, choices = list(allowed), set(integers), choices or {}
     values = {}
     for item in items:
         key, eq, text = item.partition("=")
@@ -20,6 +22,12 @@ def parse_key_values(items: Iterable[str], allowed: Iterable[str], what: str,
                         f"{', '.join(allowed)}")
         if key in values:
             raise error(f"{what}.{key} is given twice ({item!r}): give each key once")
+        if key in choices:
+            if text not in choices[key]:
+                raise error(f"bad value {text!r} for {what}.{key}: choose one of "
+                            f"{', '.join(choices[key])}")
+            values[key] = text
+            continue
         try:
             values[key] = int(text) if key in integers else float(text)
         except ValueError:

@@ -148,24 +148,35 @@ RANGES = {
     "sea_depth": (0.0, 11000.0, "m (0: deep water)", False),
     "every": (0.0, 3600.0, "s", False),
 }
+#: Keys that take a word: the axis a kick turns the hull about.
+CHOICES = {"axis": ("yaw", "pitch", "roll")}
 
 @dataclass
 class Kick(Disturbance):
-    """An angular-rate impulse at time ``start``: the gimbal (``hull=0``) or the AUV's
-    yaw (``hull=1``) suddenly turns ``rate`` faster, as when the vehicle is struck; strong
-    enough by default to throw the receiver out of the observers' domain.
+    """An angular-rate impulse at time ``start``: the gimbal (``hull=0``) or the AUV
+    (``hull=1``) suddenly turns ``rate`` faster about ``axis``, as when the vehicle is
+    struck; strong enough by default to throw the receiver out of the observers' domain.
 
     Attributes:
         start: time of the impulse [s].
         rate: added angular rate [rad/s].
-        hull: 0 = the gimbal hinge, 1 = the hull's yaw.
+        hull: 0 = the gimbal hinge, 1 = the hull.
+        axis: the hull's axis, in its own frame: ``yaw`` (about its vertical, the one
+            the gimbal turns about), ``pitch`` (about its sideways axis: the line of
+            sight tilts out of the gimbal's plane) or ``roll`` (about its length: the
+            line of sight barely moves). The gimbal's hinge turns in yaw only.
     """
 
     start: float = 3.0
     rate: float = 8.0
     hull: float = 0.0
+    axis: str = "yaw"
 
     def __post_init__(self):
+        if self.axis != "yaw" and not self.hull:
+            raise DisturbanceError(f"kick.axis={self.axis} is not allowed with hull=0: the "
+                                   "gimbal's hinge turns in yaw only; use hull=1 to kick "
+                                   f"the hull in {self.axis}")
         self._done = False
 
     def reset(self, seed: int) -> None:
@@ -173,7 +184,7 @@ class Kick(Disturbance):
 
     def apply(self, world: LinkWorld, t: float) -> None:
         if not self._done and t >= self.start:
-            world.add_angular_rate(self.rate, hull=bool(self.hull))
+            world.add_angular_rate(self.rate, hull=bool(self.hull), axis=self.axis)
             self._done = True
 
     @property
@@ -237,9 +248,11 @@ def parse_disturbance(text: str) -> Disturbance:
     cls = DISTURBANCES[name]
     items = list(filter(None, args.split(",")))
     kwargs = parse_key_values(items, [f.name for f in fields(cls)], name, DisturbanceError,
-                              integers=("seed", "strips"))
+                              integers=("seed", "strips"), choices=CHOICES)
     texts = dict(i.partition("=")[::2] for i in items)
     for key, v in kwargs.items():
+        if key in CHOICES:
+            continue
         lo, hi, unit, lo_open = RANGES[key]
         if not (math.isfinite(v) and (lo < v if lo_open else lo <= v) and v <= hi):
             raise DisturbanceError(f"{name}.{key}={texts[key]} is not allowed: must be in "

@@ -83,11 +83,12 @@ class GimbalAccess:
             self.data.qpos[list(self.ids.axes_qpos)] = angle
             self.data.qvel[list(self.ids.axes_dof)] = rate
 
-    def add_angular_rate(self, rate: float, hull: bool = False) -> None:
-        """An angular-rate impulse [rad/s] about the vertical: to the gimbal hinge, or
-        (``hull``) to the AUV's yaw."""
-        if hull:
-            self.data.qvel[self._hull_dof + 5] += rate  # free joint: (v, omega), omega z
+    def add_angular_rate(self, rate: float, hull: bool = False, axis: str = "yaw") -> None:
+        """An angular-rate impulse [rad/s]: to the gimbal hinge, or (``hull``) to the
+        AUV about its own ``axis`` (``roll``, ``pitch`` or ``yaw``: x, y or z of the hull's
+        frame, in which MuJoCo's free joint keeps its angular velocity)."""
+        if hull:  # free joint: (v, omega), omega in the body's frame
+            self.data.qvel[self._hull_dof + 3 + ("roll", "pitch", "yaw").index(axis)] += rate
         else:
             self.data.qvel[self._hinge_dof] += rate
 
