@@ -53,7 +53,7 @@ def test_a_pan_tilt_head_with_four_photodiodes_is_built_and_turns_on_both_axes()
     # at rest the quad's tilts turn two photodiodes out of the pan plane, up and down
     world.reset(gimbal_angle=np.zeros(2), gimbal_rate=np.zeros(2))
     normals = np.array([world.photodiode_normal(i) for i in range(4)])
-    np.testing.assert_allclose(normals[2:, 2], [np.sin(D), -np.sin(D)], atol=1e-12)
+    np.testing.assert_allclose(normals[2:, 2], [-np.sin(D), np.sin(D)], atol=1e-12)
 
 
 def test_the_check_fails_when_an_axis_is_wired_to_the_wrong_hinge(monkeypatch):

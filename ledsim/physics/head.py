@@ -29,9 +29,12 @@ HEAD_MASS, HEAD_INERTIA = 0.005, 2e-7
 
 def photodiode_normal(offset: float, tilt: float) -> list[float]:
     """The normal of a photodiode whose incidence angle is the reference's plus
-    ``offset`` about the pan axis (z) and ``tilt`` about the tilt axis (y) [rad]: the
-    reference normal +x turned by ``-tilt`` about y, then by ``-offset`` about z."""
-    x, z = math.cos(tilt), math.sin(tilt)
+    ``offset`` about the pan axis (z) and whose elevation is the reference's plus
+    ``tilt`` [rad]: the reference normal +x turned down by ``tilt`` (about y), then by
+    ``-offset`` about z. Both angles are the line of sight's in the photodiode's view,
+    positive to the left and up: a normal turned right (or down) sees the LED that much
+    further left (or up)."""
+    x, z = math.cos(tilt), -math.sin(tilt)
     c, s = math.cos(-offset), math.sin(-offset)
     return [c * x, s * x, z]
 

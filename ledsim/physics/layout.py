@@ -139,8 +139,12 @@ class ReceiverLayout:
 
     @property
     def reference(self) -> int:
-        """Index of the reference photodiode (offset 0): its incidence angle is phi, and
-        the link's data (availability, the link budget) ride on it."""
+        """Index of the reference photodiode (offset 0, and tilt 0 where there is one:
+        the boresight's data detector of a quad): its incidence angle is phi, and the
+        link's data (availability, the link budget) ride on it."""
+        for i, p in enumerate(self.photodiodes):
+            if p.offset == 0.0 and p.tilt == 0.0:
+                return i
         return self.offsets.index(0.0)
 
     def buildable(self) -> ReceiverLayout:
@@ -188,6 +192,12 @@ class ReceiverLayout:
 
 #: The paper's gimbal: one vertical hinge (azimuth), its motor and its encoder.
 AZIMUTH = GimbalAxis("azimuth", "gimbal_hinge", "gimbal_motor", "gimbal_encoder")
+#: The tilt of a pan-tilt head, built on the pan (``physics/head.py``). Its hinge turns
+#: about -y, so that, as on the pan, a positive encoder angle turns the head towards a
+#: lower line of sight: elevation = elevation_home - q, and a torque tau gives
+#: elevation'' = -tau / I on both axes.
+ELEVATION = GimbalAxis("elevation", "tilt_hinge", "tilt_motor", "tilt_encoder",
+                       angle="theta", rate="thetadot", direction=(0.0, -1.0, 0.0))
 
 
 @functools.lru_cache(maxsize=16)
@@ -196,3 +206,16 @@ def paper_layout(dphi: float) -> ReceiverLayout:
     ``pd2`` (phi + ``dphi`` [rad]) on the azimuth axis."""
     return ReceiverLayout((Photodiode("pd1", "p1", 0.0), Photodiode("pd2", "p2", dphi)),
                           (AZIMUTH,))
+
+
+@functools.lru_cache(maxsize=16)
+def quad_layout(spread: float) -> ReceiverLayout:
+    """A quad on a pan-tilt head: a data detector ``pd0`` on the boresight (the
+    reference: availability and the link budget ride on it), and four pointing
+    photodiodes ``pq1``-``pq4`` turned by +-``spread`` [rad] in azimuth and in
+    elevation, whose powers give both angles (the paper's pair, one dimension up)."""
+    return ReceiverLayout((Photodiode("pd0", "p0", 0.0),
+                           Photodiode("pq1", "q1", spread), Photodiode("pq2", "q2", -spread),
+                           Photodiode("pq3", "q3", 0.0, spread),
+                           Photodiode("pq4", "q4", 0.0, -spread)),
+                          (AZIMUTH, ELEVATION))

@@ -103,6 +103,22 @@ def layout_power(gain, phi, c: LinkConstants) -> np.ndarray:
                      for offset in c.layout.offsets], axis=-1)
 
 
+def head_power(gain, azimuth, elevation, c: LinkConstants) -> np.ndarray:
+    """Outputs of a receiver head's photodiodes (``c.layout``) when the line of sight
+    stands ``azimuth`` and ``elevation`` [rad] from its boresight (left and up
+    positive): gain x g(azimuth + offset_i) x g(elevation + tilt_i) [W], a physical
+    receiver's cone taken as the same response across the pan plane as in it. The paper's
+    bench measured its detectors about the hinge only: there it is gain x g(azimuth +
+    offset_i), :func:`layout_power`. The angles have any (common) shape; the result has
+    one more axis, one entry a photodiode."""
+    az, el = np.broadcast_arrays(np.asarray(azimuth, dtype=float),
+                                 np.asarray(elevation, dtype=float))
+    cone = c.link is not None
+    return np.stack([received_power(gain, az + p.offset, c.receiver)
+                     * (receiver_response(el + p.tilt, c.receiver) if cone else 1.0)
+                     for p in c.layout.photodiodes], axis=-1)
+
+
 def layout_power_jacobian(gain, phi, c: LinkConstants) -> np.ndarray:
     """d(layout_power)/d(phi, phidot), shape ``phi.shape + (n_pd, 2)`` [W/rad, W s/rad]."""
     phi = np.asarray(phi, dtype=float)
