@@ -157,9 +157,15 @@ class GaussianFilter(ToldNoise, Estimator):
 
     def R_at(self, y_pred: np.ndarray | None, ok: np.ndarray) -> np.ndarray:
         """R over the usable outputs ``ok`` at the predicted output ``y_pred`` (needed
-        only where the noise depends on the output)."""
+        only where the noise depends on the output, or where the system states the
+        relative error of its own h, ``model_error``: its share of each output adds to
+        the noise, so that a filter at a high SNR does not trust h beyond its
+        accuracy)."""
         R = self.system.measurement_noise.covariance(y_pred) if self.signal_noise else self.R
         R = R[np.ix_(ok, ok)]
+        error = getattr(self.system, "model_error", 0.0)
+        if error and y_pred is not None:
+            R = R + np.diag((error * np.asarray(y_pred)[ok]) ** 2)
         return R if self.noise_scale == 1.0 else R * (self.noise_scale * self.noise_scale)
 
     def covariance(self) -> np.ndarray:

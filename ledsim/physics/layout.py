@@ -185,6 +185,11 @@ class ReceiverLayout:
         """The first axis's angle [rad] of states ``x`` (last axis the state)."""
         return np.asarray(x)[..., 0]
 
+    def angles(self, x) -> np.ndarray:
+        """Every axis's angle [rad] of states ``x`` (angles, then rates), the axes on
+        the first axis: shape ``(n_axes,) + x.shape[:-1]``."""
+        return np.moveaxis(np.asarray(x)[..., :self.n_axes], -1, 0)
+
     def rate(self, x) -> np.ndarray:
         """The first axis's rate [rad/s] of states ``x`` (last axis the state)."""
         return np.asarray(x)[..., 1]

@@ -170,10 +170,10 @@ def achievable_power(distance, emission_angle, c: LinkConstants, peak_response: 
 
 
 def plausible_power_range(c: LinkConstants) -> tuple[np.ndarray, np.ndarray]:
-    """(low, high) of physically possible measured powers of the two photodiodes [W]."""
-    sigma = c.measurement_noise_std
-    return (np.full(2, -IMPOSSIBLE_SIGMAS * sigma),
-            np.full(2, 2.0 * peak_power(c) + IMPOSSIBLE_SIGMAS * sigma))
+    """(low, high) of physically possible measured powers of the photodiodes [W]."""
+    sigma, n = c.measurement_noise_std, c.layout.n_photodiodes
+    return (np.full(n, -IMPOSSIBLE_SIGMAS * sigma),
+            np.full(n, 2.0 * peak_power(c) + IMPOSSIBLE_SIGMAS * sigma))
 
 
 _SHAPE_PHI = np.linspace(-1.2, 1.2, 4801)

@@ -1,0 +1,132 @@
+"""Two-axis tracking from the photodiodes alone (issue 48): the head's four-state model
+fitted to MuJoCo, an EKF in four states on it, and the control step pointing a quad on a
+pan-tilt head at the LED on both axes."""
+
+from dataclasses import replace
+
+import numpy as np
+import pytest
+
+from ledsim.agent.laws import AlignmentPID
+from ledsim.agent.step import ControlStep, GimbalMotor, Unsupervised, identity_gate
+from ledsim.physics import head
+from ledsim.physics.head_model import HeadModel
+from ledsim.physics.layout import AZIMUTH, quad_layout
+from ledsim.physics.scene import WorldConfig
+from ledsim.physics.sensor import IrradianceSensor
+from ledsim.physics.world import LinkWorld
+from ledsim.physics.world_rows import WorldRows
+from ledsim.radiometry.link_presets import link_constants
+from observer.baselines.ekf import ExtendedKalmanFilter
+
+
+def quad_world() -> LinkWorld:
+    c = replace(link_constants("luma", 30.0), receiver_layout=quad_layout(0.1))
+    return LinkWorld(WorldConfig(constants=c, depth=20.0))
+
+
+@pytest.fixture(scope="module")
+def model():
+    return HeadModel.fit(quad_world())
+
+
+def truth(sensor) -> np.ndarray:
+    """The line of sight's azimuth and elevation in the head's frame [rad]: the data
+    detector's (on the boresight)."""
+    return np.array([sensor.read(noise=False).incidence_angle[0], sensor.elevation()[0]])
+
+
+def test_the_model_predicts_one_step_of_the_head(model):
+    world = quad_world()
+    rng = np.random.default_rng(5)
+    err = []
+    for _ in range(100):
+        x, u = rng.uniform(-0.4, 0.4, 4), rng.uniform(-10, 10, 2)
+        world.reset(gimbal_angle=-x[:2], gimbal_rate=-x[2:])
+        world.set_torques(model.torque_for(u))
+        world.step()
+        err.append(np.r_[-world.gimbal_angles, -world.gimbal_rates] - model.f(x, u))
+    rms = np.sqrt(np.mean(np.square(err), axis=0))
+    assert np.all(rms[:2] < 1e-5) and np.all(rms[2:] < 1e-3), rms  # 9e-7, 1e-8; 2e-4, 2e-6
+    jac = model.h_jacobian(np.array([0.1, -0.05, 0.0, 0.0]))
+    from observer.system import _central_jacobian
+
+    np.testing.assert_allclose(jac, _central_jacobian(model.h, np.array([0.1, -0.05, 0, 0]),
+                                                      1e-6), atol=1e-18)
+
+
+def ekf_error(model, model_error: float | None = None, steps: int = 800) -> np.ndarray:
+    """The EKF's largest angle errors [rad] past its first second, the head driven on
+    both axes by known inputs and starting (0.2, -0.15) rad off."""
+    world = quad_world()
+    world.reset(gimbal_angle=np.array([0.2, -0.15]), gimbal_rate=np.zeros(2))
+    sensor = IrradianceSensor(world, seed=1)
+    if model_error is not None:
+        model = replace_error(model, model_error)
+    ekf = ExtendedKalmanFilter(model)
+    ekf.reset(np.zeros(4))
+    worst = np.zeros(2)
+    Te = model.Te
+    for k in range(steps):
+        xhat = ekf.update(sensor.read().power)
+        if k * Te >= 1.0:
+            worst = np.maximum(worst, np.abs(xhat[:2] - truth(sensor)))
+        u = np.array([0.3 * np.sin(1.3 * k * Te), 0.2 * np.cos(0.9 * k * Te)])
+        ekf.predict(u)
+        world.set_torques(model.torque_for(u))
+        world.step()
+    return worst
+
+
+def replace_error(model, error: float):
+    import copy
+
+    other = copy.copy(model)
+    other.model_error = error
+    return other
+
+
+def test_an_ekf_in_four_states_follows_both_angles(model):
+    worst = ekf_error(model)
+    assert np.all(worst < 0.02), worst  # 9e-3 and 4e-3 measured
+    # At luma's SNR the noise is 5e-5 of the power: trusting h to that, the EKF is
+    # thrown off by the model's own 0.3 % (the model_error the filter counts).
+    assert np.max(ekf_error(model, model_error=0.0)) > 0.1
+
+
+def point(model, world) -> tuple[np.ndarray, float]:
+    """The control step with the EKF points the quad from 0.25, -0.2 rad off for 4 s;
+    the last second's largest pointing error per axis [rad] and the data detector's
+    least power over its best then [-]."""
+    world.reset(gimbal_angle=np.array([0.25, -0.2]), gimbal_rate=np.zeros(2))
+    sensor = IrradianceSensor(world, seed=3)
+    c = world.config.constants
+    step = ControlStep(identity_gate, Unsupervised(ExtendedKalmanFilter(model)),
+                       AlignmentPID(phi_ref=0.0), c,
+                       GimbalMotor(model.inertia, limit=world.config.torque_limit),
+                       warmup=0.3)
+    worst, share = np.zeros(2), 1.0
+    with WorldRows([world]) as rows:
+        rows.start([sensor], [[]], [None])
+        for k in range(400):
+            r = sensor.read()
+            torque = step(r.power, k * c.Te, world.gimbal_angles, world.gimbal_rates)
+            if k >= 300:
+                worst = np.maximum(worst, np.abs(truth(sensor)))
+                share = min(share, float(r.power_clean[0] / model.power_gain))
+            rows.tick((k + 1) * c.Te, torques=[torque])
+    return worst, share
+
+
+def test_the_control_step_points_the_quad_on_both_axes_from_its_powers(model):
+    worst, share = point(model, quad_world())
+    assert np.all(worst < 0.01), worst  # 1e-4 and 4.4e-3 rad measured
+    assert share > 0.99
+
+
+def test_the_pointing_fails_with_the_tilt_motor_on_the_pan_hinge(model, monkeypatch):
+    built = head.add_motor
+    monkeypatch.setattr(head, "add_motor",
+                        lambda spec, name, joint: built(spec, name, AZIMUTH.joint))
+    worst, _ = point(model, quad_world())
+    assert worst[1] > 0.05
