@@ -175,3 +175,16 @@ def test_minimum_time_acquisition_on_both_axes_is_within_twice_the_bound(model, 
             rows.tick((k + 1) * c.Te, torques=[torque])
     assert arrived is not None and arrived <= 2 * bound, (arrived, bound)
     assert np.all(np.abs(truth(sensor)) < 0.01)
+
+
+def test_the_models_one_sample_paths_are_its_array_paths(model):
+    """f, h and their Jacobians for one state take plain floats (the per-step path the
+    filters use); they give the array paths' numbers."""
+    rng = np.random.default_rng(0)
+    x, u = rng.uniform(-0.4, 0.4, (30, 4)), rng.uniform(-10, 10, (30, 2))
+    for one, many in ((lambda a, b: model.f(a, b), model.f(x, u)),
+                      (lambda a, b: model.f_jacobian(a, b), model.f_jacobian(x, u)),
+                      (lambda a, b: model.h(a), model.h(x)),
+                      (lambda a, b: model.h_jacobian(a), model.h_jacobian(x))):
+        rows = np.array([one(a, b) for a, b in zip(x, u, strict=True)])
+        np.testing.assert_allclose(rows, many, rtol=1e-12, atol=1e-20)

@@ -27,10 +27,18 @@ within 0.3 rad (``tests/test_quad_optics.py``).
 
 from __future__ import annotations
 
+import math
+
 import numpy as np
 
 from ledsim.physics.world import LinkWorld
-from ledsim.radiometry.optics import head_power, plausible_power_range, receiver_response
+from ledsim.radiometry.optics import (
+    head_power,
+    plausible_power_range,
+    receiver_response,
+    response_slope,
+    response_terms,
+)
 from ledsim.radiometry.optics import receiver_response_derivative as slope
 from observer.system import DiscreteSystem
 
@@ -80,6 +88,12 @@ class HeadModel(DiscreteSystem):
         self.inertia = np.asarray(inertia, dtype=float).reshape(2)
         self._offsets = np.array([p.offset for p in layout.photodiodes])
         self._tilts = np.array([p.tilt for p in layout.photodiodes])
+        # the plain-float paths' constants
+        self._coefs = list(zip(self.coef_angle.tolist(), self.coef_rate.tolist(),
+                               strict=True))
+        self._directions = [(p.offset, p.tilt) for p in layout.photodiodes]
+        self._cone = constants.link is not None
+        self._last = None  # (angles, h, its Jacobian) of the last one-sample call
 
     # -- the input mapping -----------------------------------------------------------
 
@@ -98,12 +112,28 @@ class HeadModel(DiscreteSystem):
         return x, np.stack([rate, u, np.abs(rate) * rate], axis=-1)
 
     def f(self, x, u=0.0):
+        if np.ndim(x) == 1 and np.ndim(u) == 1:  # one sample: plain floats, ~10x faster
+            out = [0.0] * 4
+            xs, us = x.tolist(), u.tolist()
+            for a, ((a1, a2, a3), (b1, b2, b3)) in enumerate(self._coefs):
+                rate, v = xs[2 + a], us[a]
+                drag = abs(rate) * rate
+                out[a] = xs[a] + (a1 * rate + a2 * v + a3 * drag)
+                out[2 + a] = b1 * rate + b2 * v + b3 * drag
+            return np.array(out)
         x, feats = self._features(x, u)
         angles = x[..., :2] + np.einsum("...ak,ak->...a", feats, self.coef_angle)
         rates = np.einsum("...ak,ak->...a", feats, self.coef_rate)
         return np.concatenate([angles, rates], axis=-1)
 
     def f_jacobian(self, x, u=0.0, eps=None):
+        if np.ndim(x) == 1:  # one sample: plain floats
+            jac = np.eye(4)
+            for a, ((a1, _, a3), (b1, _, b3)) in enumerate(self._coefs):
+                d_drag = 2 * abs(float(x[2 + a]))
+                jac[a, 2 + a] = a1 + a3 * d_drag
+                jac[2 + a, 2 + a] = b1 + b3 * d_drag
+            return jac
         x = np.asarray(x, dtype=float)
         d_drag = 2 * np.abs(x[..., 2:])  # d(|r| r)/dr, per axis
         jac = np.zeros(x.shape[:-1] + (4, 4))
@@ -115,12 +145,18 @@ class HeadModel(DiscreteSystem):
         return jac
 
     def h(self, x):
+        if np.ndim(x) == 1:  # one sample: plain floats
+            g, _ = self._responses(x)
+            return np.array(g)
         az, el = self.constants.layout.angles(np.asarray(x, dtype=float))
         return head_power(self.power_gain, az, el, self.constants)
 
     def h_jacobian(self, x, eps=None):
         """d(h)/dx, shape (..., n_photodiodes, 4): each power's slope in azimuth and in
         elevation (the rates do not reach the powers)."""
+        if np.ndim(x) == 1:  # one sample: plain floats
+            _, jac = self._responses(x)
+            return jac
         x = np.asarray(x, dtype=float)
         r, k = self.constants.receiver, self.power_gain
         az, el = self.constants.layout.angles(x)
@@ -132,6 +168,27 @@ class HeadModel(DiscreteSystem):
         jac[..., 0] = k * slope(az, r) * receiver_response(el, r)
         jac[..., 1] = k * receiver_response(az, r) * slope(el, r)
         return jac
+
+    def _responses(self, x) -> tuple[list, np.ndarray]:
+        """h and its Jacobian at one state, in plain floats (the per-step path: the
+        same formulas as :func:`head_power` and :meth:`h_jacobian`)."""
+        key = az, el = self.constants.layout.angles(x).tolist()
+        if self._last is not None and self._last[0] == key:  # h, then its Jacobian
+            return self._last[1], self._last[2].copy()
+        r, k, cone = self.constants.receiver, self.power_gain, self._cone
+        powers, jac = [], np.zeros((self.n_output, 4))
+        for i, (offset, tilt) in enumerate(self._directions):
+            u1, u2, e1, e2 = response_terms(az + offset, r, math.exp)
+            g_az, s_az = e1 + e2, response_slope(u1, u2, e1, e2, r)
+            if cone:
+                u1, u2, e1, e2 = response_terms(el + tilt, r, math.exp)
+                g_el, s_el = e1 + e2, response_slope(u1, u2, e1, e2, r)
+            else:
+                g_el, s_el = 1.0, 0.0
+            powers.append(k * g_az * g_el)
+            jac[i, 0], jac[i, 1] = k * s_az * g_el, k * g_az * s_el
+        self._last = (key, powers, jac.copy())
+        return powers, jac
 
     # -- fitted to the world ---------------------------------------------------------
 
