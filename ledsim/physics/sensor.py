@@ -251,14 +251,27 @@ class IrradianceSensor:
         one-axis gimbal cannot turn to (on a tilted head, the plane normal to the
         photodiode's own up: its elevation, which the tilt turns)."""
         w = self.world
+        if self._tilted:
+            return np.array(self._tilted_elevation())
         h = w.hinge_axis
         out = []
         for i in self._photodiodes:
-            if self._tilted:
-                h = np.array(self._up(w.photodiode_normal(i).tolist(), w.hinge_axis.tolist()))
             v = w.led_pos - w.photodiode_pos(i)
             out.append(math.asin(max(-1.0, min(1.0, float(v @ h) / math.sqrt(float(v @ v))))))
         return np.array(out)
+
+    def _tilted_elevation(self) -> list[float]:
+        """:meth:`elevation` on a tilted head, in plain floats (each photodiode's up)."""
+        w = self.world
+        hinge, led = w.hinge_axis.tolist(), w.led_pos.tolist()
+        out = []
+        for i in self._photodiodes:
+            ux, uy, uz = self._up(w.photodiode_normal(i).tolist(), hinge)
+            px, py, pz = w.photodiode_pos(i).tolist()
+            vx, vy, vz = led[0] - px, led[1] - py, led[2] - pz
+            sine = (vx * ux + vy * uy + vz * uz) / math.sqrt(vx * vx + vy * vy + vz * vz)
+            out.append(math.asin(max(-1.0, min(1.0, sine))))
+        return out
 
     def elevation_response(self) -> np.ndarray:
         """The physical receiver's response at the elevation (its field of view is a
