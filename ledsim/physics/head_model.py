@@ -230,3 +230,4 @@ class HeadModel(DiscreteSystem):
         gain = float((g * y).sum() / (g * g).sum())
         world.reset(gimbal_angle=np.zeros(2), gimbal_rate=np.zeros(2))
         return cls(c, coef_angle, coef_rate, gain, inertia, noise_scale=noise_scale)
+

@@ -1,0 +1,87 @@
+"""One axis of a quad on a pan-tilt head, on its own: the two-state system that a
+one-axis observer of that axis estimates (:class:`~observer.kkl.decoupled.PerAxis`)."""
+
+from __future__ import annotations
+
+import numpy as np
+
+from ledsim.physics.head_model import HeadModel
+from ledsim.radiometry.optics import receiver_response
+from observer.noise import MeasurementNoise
+from observer.system import DiscreteSystem
+
+
+class AxisRatioModel(DiscreteSystem):
+    """One axis of a quad, seen through its pair of pointing photodiodes over the data
+    detector on the boresight: x = (angle, rate) of that axis, u its input, and
+    y = (P_plus / P_0, P_minus / P_0), the pair's powers over the boresight's.
+
+    Each ratio is g(angle + d) / g(angle) for the pair turned by d on that axis: the
+    other axis's response and the link's gain divide out, so the axis is a two-state
+    system of its own (the paper's, with ratios for powers), for a one-axis observer
+    trained on a two-dimensional box (:class:`~observer.kkl.decoupled.PerAxis`).
+
+    Args:
+        head: the head's model (its dynamics, gain, noise and layout).
+        axis: 0 (azimuth: the pair turned in azimuth) or 1 (elevation).
+    """
+
+    n_state = 2
+    n_output = 2
+    n_input = 1
+
+    def __init__(self, head: HeadModel, axis: int):
+        c = head.constants
+        if axis == 1 and c.link is None:
+            raise ValueError("the paper's bench measures no elevation response: its "
+                             "photodiodes cannot see the tilt")
+        self.head, self.axis, self.constants = head, axis, c
+        self.pair, self.turns = pair_of(c.layout, axis)
+        self.reference = c.layout.reference
+        self.state_names = head.state_names[axis::2]
+        self.output_names = tuple(f"{c.layout.photodiodes[i].series} / "
+                                  f"{c.layout.photodiodes[self.reference].series}"
+                                  for i in self.pair)
+        # The ratios' noise at the boresight, from the powers' there [-].
+        p0 = head.power_gain
+        sigma = float(np.max(head.measurement_noise.std_at(np.full(head.n_output, p0))))
+        ratio = self._ratios(np.zeros(1))[0]
+        std = sigma / p0 * float(np.sqrt(1.0 + np.max(ratio) ** 2))
+        self.set_model(c.Te, [head.domain_high[axis], head.domain_high[2 + axis]],
+                       [head.process_noise_std[axis], head.process_noise_std[2 + axis]],
+                       MeasurementNoise(std, 2))
+        self._coef = (head.coef_angle[axis], head.coef_rate[axis])
+
+    def _ratios(self, angle) -> np.ndarray:
+        r = self.constants.receiver
+        g0 = receiver_response(angle, r)
+        return np.stack([receiver_response(angle + d, r) / g0 for d in self.turns], axis=-1)
+
+    def f(self, x, u=0.0):
+        angle, rate = np.moveaxis(np.asarray(x, dtype=float), -1, 0)
+        u = self.input_array(u, angle.shape)[..., 0]
+        feats = np.stack([rate, u, np.abs(rate) * rate], axis=-1)
+        (a, b) = self._coef
+        return np.stack([angle + feats @ a, feats @ b], axis=-1)
+
+    def h(self, x):
+        angle, _ = np.moveaxis(np.asarray(x, dtype=float), -1, 0)
+        return self._ratios(angle)
+
+    def split(self, y) -> np.ndarray:
+        """This axis's outputs from the head's powers ``y`` [W]."""
+        y = np.asarray(y, dtype=float)
+        return y[..., list(self.pair)] / y[..., self.reference, None]
+
+
+def pair_of(layout, axis: int) -> tuple[tuple[int, int], tuple[float, float]]:
+    """The photodiodes turned on ``axis`` alone (0: azimuth, by their offsets; 1:
+    elevation, by their tilts) and how far: ((i, j), (d_i, d_j)) [rad]."""
+    found = [(i, p.offset if axis == 0 else p.tilt)
+             for i, p in enumerate(layout.photodiodes)
+             if (p.offset if axis == 0 else p.tilt) != 0.0
+             and (p.tilt if axis == 0 else p.offset) == 0.0]
+    if len(found) != 2:
+        raise ValueError(f"the layout has {len(found)} photodiodes turned on axis {axis} "
+                         "alone: a pair is needed")
+    return (found[0][0], found[1][0]), (found[0][1], found[1][1])
