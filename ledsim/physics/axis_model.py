@@ -69,8 +69,9 @@ class AxisRatioModel(DiscreteSystem):
         return self._ratios(angle)
 
     def split(self, y) -> np.ndarray:
-        """This axis's outputs from the head's powers ``y`` [W]."""
-        y = np.asarray(y, dtype=float)
+        """This axis's outputs from the head's powers ``y`` [W], each channel first
+        divided by its calibrated gain (the head model's ``channel_gains``)."""
+        y = np.asarray(y, dtype=float) / self.head.channel_gains
         return y[..., list(self.pair)] / y[..., self.reference, None]
 
 

@@ -145,10 +145,15 @@ class BatchSensor:
         if lit:  # the light around the receiver (ledsim.physics.light)
             clean = clean * np.stack([np.ones(clean.shape[1]) if w.light_gain is None
                                       else w.light_gain for w in worlds])
+        measured = clean
+        if any(s.channel_gains is not None for s in self.sensors):  # each head's calibration
+            measured = np.stack([s.calibrated(row) for s, row in zip(self.sensors, clean,
+                                                                     strict=True)])
         if self.signal_noise:
-            power = self.sensors[0].measurement_noise.measure_with(self.noise[self.k], clean)
+            power = self.sensors[0].measurement_noise.measure_with(self.noise[self.k],
+                                                                   measured)
         else:
-            power = clean + self.noise[self.k]
+            power = measured + self.noise[self.k]
         if lit:
             power = power + np.stack([np.zeros(clean.shape[1]) if w.light_noise is None
                                       else w.light_noise for w in worlds])

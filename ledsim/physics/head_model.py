@@ -57,6 +57,8 @@ class HeadModel(DiscreteSystem):
         inertia: each hinge's inertia [kg m^2], shape (2,) (a torque is -I u).
         domain: half-widths of the angles [rad] and the rates [rad/s] of the box.
         noise_scale: multiplies the measurement noise [-].
+        channel_gains: each photodiode's responsivity over its nominal, as the head was
+            calibrated [-] (None: all 1); h is what the channels put out.
     """
 
     n_state = 4
@@ -67,7 +69,8 @@ class HeadModel(DiscreteSystem):
     model_error = 3e-3
 
     def __init__(self, constants, coef_angle, coef_rate, power_gain: float, inertia,
-                 domain: tuple[float, float] = (0.5, 0.5), noise_scale: float = 1.0):
+                 domain: tuple[float, float] = (0.5, 0.5), noise_scale: float = 1.0,
+                 channel_gains=None):
         layout = constants.layout
         if layout.n_axes != 2:
             raise ValueError(f"a head model needs a layout of two axes, not "
@@ -93,7 +96,16 @@ class HeadModel(DiscreteSystem):
                                strict=True))
         self._directions = [(p.offset, p.tilt) for p in layout.photodiodes]
         self._cone = constants.link is not None
+        self.channel_gains = np.ones(self.n_output) if channel_gains is None else \
+            np.asarray(channel_gains, dtype=float).reshape(self.n_output)
+        self._gains = self.channel_gains.tolist()
         self._last = None  # (angles, h, its Jacobian) of the last one-sample call
+
+    def calibrated(self, channel_gains) -> HeadModel:
+        """This model told the head's calibration: its channels' ``channel_gains`` [-]."""
+        return HeadModel(self.constants, self.coef_angle, self.coef_rate, self.power_gain,
+                         self.inertia, (self.domain_high[0], self.domain_high[2]),
+                         self.measurement_noise.scale, channel_gains)
 
     # -- the input mapping -----------------------------------------------------------
 
@@ -149,7 +161,7 @@ class HeadModel(DiscreteSystem):
             g, _ = self._responses(x)
             return np.array(g)
         az, el = self.constants.layout.angles(np.asarray(x, dtype=float))
-        return head_power(self.power_gain, az, el, self.constants)
+        return head_power(self.power_gain, az, el, self.constants) * self.channel_gains
 
     def h_jacobian(self, x, eps=None):
         """d(h)/dx, shape (..., n_photodiodes, 4): each power's slope in azimuth and in
@@ -164,10 +176,10 @@ class HeadModel(DiscreteSystem):
         jac = np.zeros(x.shape[:-1] + (self.n_output, 4))
         if self.constants.link is None:  # the bench: azimuth only (head_power)
             jac[..., 0] = k * slope(az, r)
-            return jac
-        jac[..., 0] = k * slope(az, r) * receiver_response(el, r)
-        jac[..., 1] = k * receiver_response(az, r) * slope(el, r)
-        return jac
+        else:
+            jac[..., 0] = k * slope(az, r) * receiver_response(el, r)
+            jac[..., 1] = k * receiver_response(az, r) * slope(el, r)
+        return jac * self.channel_gains[:, None]
 
     def _responses(self, x) -> tuple[list, np.ndarray]:
         """h and its Jacobian at one state, in plain floats (the per-step path: the
@@ -185,8 +197,9 @@ class HeadModel(DiscreteSystem):
                 g_el, s_el = e1 + e2, response_slope(u1, u2, e1, e2, r)
             else:
                 g_el, s_el = 1.0, 0.0
-            powers.append(k * g_az * g_el)
-            jac[i, 0], jac[i, 1] = k * s_az * g_el, k * g_az * s_el
+            gain = k * self._gains[i]
+            powers.append(gain * g_az * g_el)
+            jac[i, 0], jac[i, 1] = gain * s_az * g_el, gain * g_az * s_el
         self._last = (key, powers, jac.copy())
         return powers, jac
 

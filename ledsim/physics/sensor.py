@@ -82,8 +82,13 @@ class IrradianceSensor:
     """
 
     def __init__(self, world: LinkWorld, seed: int = 0, noise: bool = True,
-                 noise_scale: float = 1.0, measurement_noise: MeasurementNoise | None = None):
+                 noise_scale: float = 1.0, measurement_noise: MeasurementNoise | None = None,
+                 channel_gains=None):
         self.world = world
+        #: Each photodiode's responsivity over its nominal [-] (None: all 1): a head's
+        #: calibration, which scales what a channel measures, not the light it gets.
+        self.channel_gains = None if channel_gains is None else \
+            np.asarray(channel_gains, dtype=float)
         self.constants = world.config.constants
         self.rng = np.random.default_rng(seed)
         self.measurement_noise = (self.constants.measurement_noise(noise_scale)
@@ -224,10 +229,16 @@ class IrradianceSensor:
             clean = clean * self.elevation_response()
         if w.light_gain is not None:  # the light around the receiver (physics.light)
             clean = clean * w.light_gain
-        power = self.noisy(clean) if noise else clean + 0.0
+        measured = self.calibrated(clean)
+        power = self.noisy(measured) if noise else measured + 0.0
         return SensorReading(power, clean, phi, theta, dist, vis, float(phi[ref]),
                              self.incidence_rate(ref), w.gimbal_angle, w.gimbal_rate,
                              w.hull_pos.copy())
+
+    def calibrated(self, clean: np.ndarray) -> np.ndarray:
+        """What the channels put out for the light ``clean`` [W] they get: times their
+        :attr:`channel_gains` (as it is without)."""
+        return clean if self.channel_gains is None else clean * self.channel_gains
 
     def noisy(self, clean: np.ndarray) -> np.ndarray:
         """The measured powers [W] of the clean powers ``clean`` [W]: this reading's

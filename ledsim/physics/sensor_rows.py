@@ -85,7 +85,7 @@ class SensorRows:
                 row = row * s.elevation_response()
             if w.light_gain is not None:
                 row = row * w.light_gain
-            power = s.noisy(row)
+            power = s.noisy(s.calibrated(row))
             readings.append(SensorReading(power, row, phi[n], theta[n], dist[n], vis[n],
                                           float(phi[n, self.reference]), float(rates[n]),
                                           angles[n], speeds[n], hulls[n]))
