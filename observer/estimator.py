@@ -151,6 +151,8 @@ class GaussianFilter(ToldNoise, Estimator):
         #: The noise depends on the output (a physical receiver): R is taken at the
         #: predicted output each update (:meth:`R_at`).
         self.signal_noise = noise is not None and noise.signal_dependent
+        #: The system states the relative error of its h (:meth:`R_at` counts it).
+        self.counts_model_error = bool(getattr(system, "model_error", 0.0))
         self.P0 = self.initial_covariance() if P0 is None else np.asarray(P0, dtype=float)
         self.lost_nis, self.lost_steps = lost_nis, lost_steps
         self.reset()

@@ -233,3 +233,29 @@ def test_two_one_axis_kkls_side_by_side_follow_both_angles(model):
         return PerAxis(model, kkls, lambda y: [m.split(y) for m in axes])
 
     assert np.all(ekf_error(model, kind=per_axis) < 0.05)  # 1.7e-3 and 3.1e-2 measured
+
+
+def test_the_filters_count_the_models_error_whatever_their_noise(model):
+    """R grows by the model's share of each predicted power, for a sensor's noise that
+    depends on the signal (a physical receiver's) or not."""
+    from observer.baselines.ukf import UnscentedKalmanFilter
+
+    for kind in (ExtendedKalmanFilter, UnscentedKalmanFilter):
+        f = kind(model)
+        y = model.h(np.zeros(4))
+        ok = np.ones(model.n_output, dtype=bool)
+        for signal in (True, False):
+            f.signal_noise = signal
+            base = model.measurement_noise.covariance(y) if signal else f.R
+            np.testing.assert_allclose(np.diag(f.R_at(y, ok) - base),
+                                       (model.model_error * y) ** 2, rtol=1e-12)
+        assert f.counts_model_error
+    # and the UKF's update hands R its predicted powers even when the noise does not
+    # depend on them (before, it handed None, and the model's share went uncounted)
+    ukf = UnscentedKalmanFilter(model)
+    ukf.signal_noise = False
+    seen = []
+    given = ukf.R_at
+    ukf.R_at = lambda y_pred, ok: seen.append(y_pred) or given(y_pred, ok)
+    ukf.update(model.h(np.array([0.05, 0.02, 0.0, 0.0])))
+    assert seen and seen[0] is not None

@@ -59,7 +59,8 @@ class UnscentedKalmanFilter(GaussianFilter):
             dY = Y - y_mean
             dX = X - self.x
             S = (self.Wc * dY.T) @ dY + self.R_at(
-                self.Wm @ Y_all if self.signal_noise else None, ok)
+                self.Wm @ Y_all if self.signal_noise or self.counts_model_error else None,
+                ok)
             C = (self.Wc * dX.T) @ dY
             if self.diverged(y[ok] - y_mean, S):
                 return self.x.copy()
