@@ -21,6 +21,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from ledsim.agent.axes import clip
 from ledsim.constants import LinkConstants
 from ledsim.radiometry.optics import receiver_response
 
@@ -59,6 +60,17 @@ def fit_incidence_angle(powers: np.ndarray, shift: np.ndarray, c: LinkConstants,
     best = int(np.argmin(sse))
     return ScanFit(float(_PHI_GRID[best]), float(gain[best]),
                    float(sse[best] / (noise_std**2 * powers.size)))
+
+
+def follow(q, qdot, q_ref, feed, gains: tuple[float, float], cap: float):
+    """The input u = phi'' [rad/s^2] (q'' = -u) that brings encoder angles ``q`` [rad],
+    at rates ``qdot`` [rad/s], onto a scan's reference ``q_ref`` moving at ``feed``
+    [rad/s]: a cascade, the position error to a rate target capped at ``cap`` (so a
+    kicked gimbal comes back no faster than the scan), the rate error to the input; per
+    axis (:mod:`ledsim.agent.axes`), with the gains (kp [1/s^2], kd [1/s])."""
+    kp, kd = gains
+    rate_ref = clip(feed + kp / kd * (q_ref - q), -cap, cap)
+    return kd * (qdot - rate_ref)
 
 
 class AcquisitionScan:
@@ -145,12 +157,7 @@ class AcquisitionScan:
         return total > self.detect_sigmas * noise_std * math.sqrt(2.0 / n)
 
     def _follow(self, q: float, qdot: float, feed: float) -> float:
-        # Cascade: position error -> rate target (capped, so a kicked gimbal comes back
-        # no faster than the scan), rate error -> acceleration of q (phi'' = -q'').
-        kp, kd = self.gains
-        cap = 1.25 * self.speed
-        rate_ref = float(np.clip(feed + kp / kd * (self.q_ref - q), -cap, cap))
-        return kd * (qdot - rate_ref)
+        return follow(q, qdot, self.q_ref, feed, self.gains, 1.25 * self.speed)
 
     def record(self, y: np.ndarray, q: float) -> None:
         """Keep the gated powers ``y`` [W] seen at encoder angle ``q`` [rad] (every step,

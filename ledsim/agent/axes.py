@@ -15,7 +15,7 @@ from __future__ import annotations
 
 import numpy as np
 
-__all__ = ["angles_rates", "as_axes", "clip", "magnitude", "n_axes_of"]
+__all__ = ["angles_rates", "as_axes", "clip", "magnitude"]
 
 
 def clip(x, lo, hi):
@@ -38,11 +38,6 @@ def angles_rates(xhat):
         return xhat[0], xhat[1]
     n = len(xhat) // 2
     return xhat[:n], xhat[n:]
-
-
-def n_axes_of(value) -> int:
-    """How many axes a value covers (1 for a float)."""
-    return int(np.size(value))
 
 
 def as_axes(value, n: int):

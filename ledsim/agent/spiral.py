@@ -5,8 +5,8 @@ Where the beam is outside the field of view, a one-axis gimbal sweeps back and f
 around where it looks with an Archimedean spiral, as pointing-acquisition-tracking
 terminals do: the radius grows by ``pitch`` every turn (less than the field of view, so
 that no direction falls between two turns), at a constant speed along the path. Each
-axis follows its share of the spiral's reference with the scan's cascade (a capped rate
-target from the position error, then the rate error), so the command is the input u per
+axis follows its share of the spiral's reference with the scan's cascade
+(:func:`~ledsim.agent.acquisition.follow`), so the command is the input u per
 axis (q'' = -u, as every axis turns). The caller stops the scan when the powers show the
 beam and hands over to the estimator.
 """
@@ -16,6 +16,8 @@ from __future__ import annotations
 import math
 
 import numpy as np
+
+from ledsim.agent.acquisition import follow
 
 
 class SpiralScan:
@@ -60,11 +62,9 @@ class SpiralScan:
         """The input u = angle'' per axis [rad/s^2] (q'' = -u) that follows the spiral
         from encoder angles ``q`` [rad] and rates ``qdot`` [rad/s]; advances by Te."""
         ref, feed = self.reference()
-        kp, kd = self.gains
-        cap = 1.5 * self.speed
-        rate_ref = np.clip(feed + kp / kd * (ref - np.asarray(q)), -cap, cap)
+        u = follow(np.asarray(q), np.asarray(qdot), ref, feed, self.gains, 1.5 * self.speed)
         b = self.pitch / (2.0 * math.pi)
         self.theta += self.speed / math.hypot(b * self.theta, b) * self.Te
         if b * self.theta > self.max_radius:
             self.theta = 0.0
-        return kd * (np.asarray(qdot) - rate_ref)
+        return u
