@@ -133,8 +133,8 @@ def replay_calls(estimator: Estimator, arrays: dict[str, np.ndarray]) -> float:
                             a[ns:n].reshape(ns, ns) if n > ns else None)
         elif name == "update":
             worst = max(worst, difference(estimator.update(a), out))
-        elif name == "predict":
-            estimator.predict(float(a[0]))
+        elif name == "predict":  # u: a float on one input, an array on more
+            estimator.predict(float(a[0]) if n == 1 else np.array(a))
         else:
             x = estimator.adapt_noise(float(a[0]), a[1:] if n > 1 else None)
             if x is not None:

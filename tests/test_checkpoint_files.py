@@ -20,7 +20,8 @@ from observer.kkl import checkpoint, checkpoint_io
 
 #: sha256 (its first 128 bits) of each shipped checkpoint's format, metadata and arrays
 #: (:func:`_digest`), taken from its .pt file by ``torch.load(..., weights_only=True)``
-#: before it was converted (scripts/convert_checkpoints.py) and removed.
+#: before it was converted (scripts/convert_checkpoints.py) and removed; the pan-tilt's
+#: pair, trained as .safetensors by scripts/train_pan_tilt.py, as saved.
 SHIPPED_DIGESTS = {
     "kkl_d0.085": "02dac53b16d9f37676388580bf94ca19",
     "kkl_d0.1": "df5512bd957695e16fe0e8ecf9075d6b",
@@ -37,6 +38,8 @@ SHIPPED_DIGESTS = {
     "kkl_mujoco_lens_d0.085_noise6": "8788fcb3e7b0b1991674b40a47ddb676",
     "kkl_mujoco_scheduled_d0.085": "ce74190f9b9427be77904dd81537ed90",
     "kkl_mujoco_scheduled_lens_d0.085": "4bd225c62e1a5d433df968289d44a53d",
+    "kkl_pan_tilt_azimuth": "237c10132d588e8f4c6dcea628e6c0d7",
+    "kkl_pan_tilt_elevation": "bece8300666e7185af743f7176d7904e",
     "kkl_paper_d0.085": "39b2c56fde93e732ef115dab14eda1c7",
     "kkl_scheduled_d0.085": "cd7ddc5e2c5df531c2fe709de87dc85c",
     "kkl_scheduled_d0.1": "0de3fcbede77b765a218d49c0fb438ff",

@@ -36,13 +36,14 @@ class DropoutGate:
     def __init__(self, constants: LinkConstants, floor: float | None = None,
                  max_hold: float = 1.0, smoothing: float = 0.2):
         self.floor = 0.1 * peak_power(constants) if floor is None else floor
+        self.n = constants.layout.n_photodiodes
         self.max_steps = math.inf if math.isinf(max_hold) else int(round(max_hold / constants.Te))
         self.smoothing = smoothing
         self.reset()
 
     def reset(self) -> None:
-        self._held = [0, 0]
-        self._expired = [False, False]  # held too long: passing the darkness on
+        self._held = [0] * self.n
+        self._expired = [False] * self.n  # held too long: passing the darkness on
         self._level: list | None = None
 
     @property

@@ -113,7 +113,7 @@ def demo(args) -> int:
     from ledsim.files.outputs import atomic_write_text
     from ledsim.files.results import write_json
     from ledsim.loop.build.estimation import check_checkpoint
-    from ledsim.loop.registry import COMPARED_ESTIMATORS
+    from ledsim.loop.registry import COMPARED_ESTIMATORS, TWO_AXIS_ESTIMATORS
     from ledsim.loop.report import run_many, write_run
     from ledsim.loop.run_config import RunConfig
     from ledsim.loop.table import TABLE_HEADER, format_summary
@@ -123,8 +123,11 @@ def demo(args) -> int:
     t0 = time.perf_counter()
     rows, summaries = [], []
     # Every estimator's run and the video are checked before the first one starts.
-    cfgs = [RunConfig(scenario="align", estimator=est, **spec_values(args))
-            for est in COMPARED_ESTIMATORS]
+    values = spec_values(args)
+    # a pan-tilt head runs the estimators it takes (the KKL, EKF, UKF, PF and oracle)
+    estimators = TWO_AXIS_ESTIMATORS if RunConfig(**values).world.two_axes else \
+        COMPARED_ESTIMATORS
+    cfgs = [RunConfig(scenario="align", estimator=est, **values) for est in estimators]
     for cfg in cfgs:
         cfg.validate()
         check_checkpoint(cfg)
@@ -133,7 +136,7 @@ def demo(args) -> int:
         check_video(_demo_video_config(args.scene, spec_values(args, VEHICLE)), VideoSpec())
     _warn_saturated(cfgs[0])
     with output_folder(out) as tmp:
-        for est, cfg in zip(COMPARED_ESTIMATORS, cfgs, strict=True):
+        for est, cfg in zip(estimators, cfgs, strict=True):
             summary, trace = run_many(cfg, progress=not args.quiet)
             write_run(summary, trace, tmp / est)
             summaries.append(summary)

@@ -46,7 +46,7 @@ def add_run_knobs(p) -> None:
 
 def add_start_arg(p) -> None:
     """The run's start and acquisition (run, render, sweep)."""
-    add_spec_flags(p, "acquisition", "initial_angle")
+    add_spec_flags(p, "acquisition", "initial_angle", "initial_elevation")
 
 
 def add_vehicle_args(p) -> None:
@@ -54,8 +54,14 @@ def add_vehicle_args(p) -> None:
     add_spec_flags(p, "imu", "station_keeping", "imu_noise", "station_keeping_gains")
 
 
+def add_head_args(p) -> None:
+    """The receiver's gimbal and photodiodes (run, render, sweep, demo)."""
+    add_spec_flags(p, "gimbal", "receiver", "channel_mismatch")
+
+
 def add_loop_args(p) -> None:
     add_spec_flags(p, "scenario", "estimator", "disturbances", "filter_distance",
                    "supervision")
     add_vehicle_args(p)
     add_world_args(p)
+    add_head_args(p)

@@ -7,6 +7,7 @@ import argparse
 import math
 
 from ledsim.cli.groups import (
+    add_head_args,
     add_link_args,
     add_loop_args,
     add_run_knobs,
@@ -223,6 +224,7 @@ def build_parser() -> argparse.ArgumentParser:
         "help": "no loss detection or reacquisition (see ledsim run)"})
     add_vehicle_args(sw)
     add_link_args(sw)
+    add_head_args(sw)
     add_scene_args(sw)
     sw.add_argument("--backend", default="local", **choices(BACKENDS),
                     help="local processes, or Ray (pip install 'ledsim[ray]')")
@@ -243,5 +245,6 @@ def build_parser() -> argparse.ArgumentParser:
     add_spec_flags(dm, "distance", distance={
         "help": "link distance d [m] (default: the --link preset's)"})
     add_link_args(dm)
+    add_head_args(dm)
     add_vehicle_args(dm)
     return p

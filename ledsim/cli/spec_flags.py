@@ -74,10 +74,12 @@ def flags() -> dict[str, Flag]:
     )
     from ledsim.loop.registry import (
         ACQUISITIONS,
+        GIMBALS,
         LOOP_ESTIMATORS,
         MAX_INITIAL_ANGLE,
         OMEGA_MODELS,
         PHYSICS_SCENARIOS,
+        RECEIVERS,
     )
     from ledsim.physics.disturbances import DISTURBANCES
     from ledsim.physics.scene import INTEGRATORS
@@ -107,6 +109,17 @@ def flags() -> dict[str, Flag]:
         "receiver_dome": Flag("the receiver's head turns inside a dome, out of the water's "
                               "flow (default: open to it, as on the paper's bench)",
                               form="on"),
+        "gimbal": Flag("the receiver's gimbal: yaw (the paper's one axis, with the pair) "
+                       "or pan-tilt (azimuth and elevation, with the quad) (default: the "
+                       "--receiver's, or yaw)", choices=GIMBALS),
+        "receiver": Flag("the receiver's photodiodes: pair (the paper's two, on the yaw "
+                         "gimbal) or quad (a data detector on the boresight and four "
+                         "pointing photodiodes, on the pan-tilt) (default: the --gimbal's)",
+                         choices=RECEIVERS),
+        "channel_mismatch": Flag("on the quad, the gain mismatch between opposite "
+                                 "pointing photodiodes [-] (each pair reads 1 +- M/2 of "
+                                 "its light; the estimators are told it, as calibrated)",
+                                 number(0.0, 0.5, "-"), metavar="M"),
         "scene": Flag("MJCF scene file (default: the shipped led_link.xml)"),
         "integrator": Flag("MuJoCo integrator (docs/physics.md compares them)",
                            choices=INTEGRATORS),
@@ -131,6 +144,11 @@ def flags() -> dict[str, Flag]:
         "supervision": Flag("no loss detection, gain tracking or reacquisition scan: the "
                             "estimator alone drives the motor (and the KKL is the shipped "
                             "one of --distance)", form="off"),
+        "initial_elevation": Flag("on a pan-tilt head, the LED's true elevation from the "
+                                  "boresight at the start [rad] (default: 0, the tilt "
+                                  "pointed at it)",
+                                  number(-MAX_INITIAL_ANGLE, MAX_INITIAL_ANGLE, "rad"),
+                                  metavar="RAD"),
         "initial_angle": Flag("true incidence angle phi at the start, at rest [rad] "
                               "(default: the scenario's; beyond about 0.6 rad the LED is "
                               "outside the field of view)",

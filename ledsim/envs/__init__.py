@@ -9,6 +9,9 @@ id                          what it is
                             30 m in clear ocean, ``ledsim run``'s default
                             (docs/link.md); any constructor argument still
                             overrides it
+``ledsim/LinkAlign-v2``     a pan-tilt head with its quad on that link: a (2,)
+                            action, five powers over the link's peak and both
+                            encoders (:mod:`ledsim.envs.head_align`)
 ==========================  =================================================
 
 ``gym.make_vec(id, num_envs=N)`` builds the native vector env of either id
@@ -36,5 +39,11 @@ if ENV_ID_PHYSICAL not in registry:
              vector_entry_point="ledsim.envs.vector:LinkAlignVectorEnv",
              max_episode_steps=1000, kwargs={"link": "luma"})
 
-__all__ = ["ENV_ID", "ENV_ID_PHYSICAL", "LinkAlignEnv", "EstimatorObservation",
+#: The pan-tilt head's env.
+ENV_ID_HEAD = "ledsim/LinkAlign-v2"
+if ENV_ID_HEAD not in registry:
+    register(id=ENV_ID_HEAD, entry_point="ledsim.envs.head_align:HeadAlignEnv",
+             max_episode_steps=1000)
+
+__all__ = ["ENV_ID", "ENV_ID_HEAD", "ENV_ID_PHYSICAL", "LinkAlignEnv", "EstimatorObservation",
            "ShippedAlignmentPolicy"]

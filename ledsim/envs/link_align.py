@@ -138,7 +138,7 @@ class LinkAlignEnv(gym.Env, EzPickle):
             c = self.cfg
             world_config = replace(world_config, constants=link_constants(
                 c.link, distance, c.water, c.attenuation, LinkConstants(Te=Te)))
-        self.system = GimbalSystem(world_config)
+        self.system = self._system_of(world_config)
         self.world = self.system.world
         self.model, self.data = self.world.model, self.world.data
         self.dt = self.system.Te
@@ -173,6 +173,10 @@ class LinkAlignEnv(gym.Env, EzPickle):
         self.episode = 0  # resets so far (a policy restarts when it changes)
         self.k = 0  # control steps of this episode
         self.start_gimbal_angle = 0.0
+
+    def _system_of(self, world_config):
+        """The model system of the env's world (a pan-tilt's: ``envs.head_align``)."""
+        return GimbalSystem(world_config)
 
     def _observe(self, reading=None):
         r = self.reading = self.sensor.read() if reading is None else reading

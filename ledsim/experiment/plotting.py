@@ -93,10 +93,14 @@ def plot_series(res, path: Path, title: str = "") -> Path:
     return _save(fig, path)
 
 
-def _power_axis(ax, t, power, power_clean, blocked, blocked_label: str) -> None:
-    for j in range(2):
+def _power_axis(ax, t, power, power_clean, blocked, blocked_label: str,
+                layout=None) -> None:
+    """Each photodiode's measured and true power (named by ``layout``; None: P1, P2)."""
+    names = [f"P{j + 1}" for j in range(2)] if layout is None else \
+        [p.series.upper() for p in layout.photodiodes]
+    for j, name in enumerate(names):
         ax.plot(t, power[:, j], lw=0.5, alpha=0.5, color=f"C{j}")
-        ax.plot(t, power_clean[:, j], lw=1.5, color=f"C{j}", label=f"P{j + 1}")
+        ax.plot(t, power_clean[:, j], lw=1.5, color=f"C{j}", label=name)
     _shade(ax, t, blocked, blocked_label)
     ax.set_ylabel("power [W]")
     ax.legend(fontsize=8)
@@ -106,8 +110,11 @@ def plot_run(trace, title: str, estimator: str, path: Path) -> Path:
     """MuJoCo truth vs estimate and the powers of one closed-loop run (``Trace``)."""
     t = trace.t
     fig, axes = _subplots(3, 1, figsize=(9, 8), sharex=True)
-    for i, (ax, label) in enumerate(zip(axes[:2], ["phi [rad]", "phidot [rad/s]"],
-                                        strict=True)):
+    layout = getattr(trace, "layout", None)
+    # a pan-tilt head: its two angles (the state's first two); one axis: phi and phidot
+    labels = ["azimuth [rad]", "elevation [rad]"] if layout is not None and \
+        layout.n_axes == 2 else ["phi [rad]", "phidot [rad/s]"]
+    for i, (ax, label) in enumerate(zip(axes[:2], labels, strict=True)):
         ax.plot(t, trace.x[:, i], "k", lw=2, label="MuJoCo truth")
         ax.plot(t, trace.xhat[:, i], "C0", lw=1, label=f"{estimator} estimate")
         ax.set_ylabel(label)
@@ -120,7 +127,7 @@ def plot_run(trace, title: str, estimator: str, path: Path) -> Path:
                             label="link lost (supervisor)" if ax is axes[0] else None)
     axes[0].legend(fontsize=8)
     _power_axis(axes[2], t, trace.power, trace.power_clean, trace.occluded.any(axis=1),
-                "blocked")
+                "blocked", layout)
     axes[2].set_xlabel("time [s]")
     axes[2].grid(alpha=0.3)
     axes[0].set_title(title)

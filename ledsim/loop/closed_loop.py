@@ -20,6 +20,7 @@ from collections.abc import Callable, Sequence
 import numpy as np
 from tqdm.auto import tqdm
 
+from ledsim.agent.head_supervisor import HeadSupervisor
 from ledsim.agent.supervisor import LinkSupervisor
 from ledsim.experiment.montecarlo import report_progress
 from ledsim.loop.build import SeedRun, build_run
@@ -47,7 +48,7 @@ class LoopRun:
         self.vehicle, self.step, self._latest = built.vehicle, built.step, built.latest
         self.aided = aided
         self.given = GivenRecord(steps) if record else None
-        self.supervised = isinstance(self.step.supervisor, LinkSupervisor)
+        self.supervised = isinstance(self.step.supervisor, LinkSupervisor | HeadSupervisor)
         lay = system.constants.layout
         npd, nx = lay.n_photodiodes, lay.n_state
         # u and the torque: one float a step for one axis, one per axis for more
@@ -83,11 +84,12 @@ class LoopRun:
         now), and return the motor torque [N m] the control step commands (per axis)."""
         r = self._latest.reading = self.sensor.read() if reading is None else reading
         self.geo[k] = r.distance, r.emission_angle, r.incidence_angle, r.visible_fraction
-        self.state[k] = r.phi, r.phidot
         if self.axes == 1:
+            self.state[k] = r.phi, r.phidot
             q, qdot = r.gimbal_angle, r.gimbal_rate
             self.gimbal[k] = q, qdot
         else:
+            self.state[k] = r.x
             q, qdot = self.world.gimbal_angles, self.world.gimbal_rates
             self.gimbal[k, :self.axes], self.gimbal[k, self.axes:] = q, qdot
         self.hull[k], self.power[k], self.clean[k] = r.hull_pos, r.power, r.power_clean

@@ -62,12 +62,12 @@ def step_flags(x: np.ndarray, xhat: np.ndarray, layout, Te: float, warmup: float
     occluder shaded any photodiode (None: always, never), and the re-seeds (None:
     none)."""
     n = len(x)
-    error = layout.angle(xhat) - layout.angle(x)
+    error = layout.pointing_error(xhat, x)
     flagged = np.zeros(n, bool) if lost is None else np.asarray(lost, dtype=bool)
     counted = np.arange(n) * Te >= warmup
     silent = (np.abs(error) > SILENT_ERROR) & ~flagged & counted
     onset = loss_onsets(flagged)
-    own_error = error if own is None else layout.angle(own) - layout.angle(x)
+    own_error = error if own is None else layout.pointing_error(own, x)
     clear = np.ones(n, bool) if possible is None else np.asarray(possible, dtype=bool)
     if shaded is not None:
         clear = clear & ~np.asarray(shaded, dtype=bool)

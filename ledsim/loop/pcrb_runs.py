@@ -34,11 +34,22 @@ def run_terms(res, u: np.ndarray, measured: np.ndarray, model, constants, noise)
         noise: the run's measurement noise.
     """
     x = res.x
-    # d(power_i)/d(state) at the true geometry: each photodiode's own transmitter gain
-    # and visible share times the receiver's slope.
-    gain = transmitter_gain(res.distance, res.emission_angle, constants) * res.visible_fraction
-    H = layout_power_jacobian(1.0, constants.layout.angle(x), constants) * gain[:, :, None]
-    F = model.f_jacobian(x, u[:, None])
+    if constants.layout.n_axes == 2:
+        # A pan-tilt head: its model's h along the true angles, scaled by each step's
+        # transmitter gain and visible share over the model's (the distance's) gain.
+        gain = transmitter_gain(res.distance, res.emission_angle, constants) * \
+            res.visible_fraction
+        scale = gain / float(transmitter_gain(np.array(constants.distance), 0.0, constants))
+        H = model.h_jacobian(x) * scale[:, :, None]
+        F = model.f_jacobian(x, u)
+    else:
+        # d(power_i)/d(state) at the true geometry: each photodiode's own transmitter
+        # gain and visible share times the receiver's slope.
+        gain = transmitter_gain(res.distance, res.emission_angle, constants) * \
+            res.visible_fraction
+        H = layout_power_jacobian(1.0, constants.layout.angle(x), constants) * \
+            gain[:, :, None]
+        F = model.f_jacobian(x, u[:, None])
     # A physical receiver's noise at each step's clean powers (the information a
     # signal-dependent variance itself carries is left out: it is small beside the mean's).
     var = noise.std_at(res.power_clean) ** 2 if noise.signal_dependent else \
@@ -59,6 +70,8 @@ def bound_summary(outs, steady_step: int, estimates: bool = True) -> dict:
     kept = [o for o in outs if o.bound is not None]
     if not kept:
         return {}
+    if "pointing" in kept[0].metrics.rmse_steady:
+        return head_bound_summary(kept, steady_step, estimates)
     errs = np.array([[o.metrics.rmse_steady["x1"], o.metrics.rmse_steady["x2"]]
                      for o in kept], dtype=float)
     bound, ratio, err = bound_against([o.bound for o in kept], kept[0].bound["prior"],
@@ -68,4 +81,32 @@ def bound_summary(outs, steady_step: int, estimates: bool = True) -> dict:
         for i, key in enumerate(("x1", "x2")):
             out[f"rmse_over_pcrb_{key}"] = float(ratio[i])
             out[f"rmse_over_pcrb_err_{key}"] = float(err[i])
+    return out
+
+
+#: A pan-tilt run's states by name, in the state's order.
+HEAD_STATES = ("azimuth", "elevation", "azimuth_rate", "elevation_rate")
+
+
+def head_bound_summary(kept, steady_step: int, estimates: bool) -> dict:
+    """:func:`bound_summary` of pan-tilt runs: the bound's steady root
+    (``pcrb_steady_x1``/``_x2`` the azimuth's angle [rad] and rate [rad/s], as on one
+    axis; ``pcrb_steady_azimuth``, ``_elevation``, and ``_pointing``, the root of the
+    two angles' sum [rad]); with ``estimates``, the steady RMSE over each
+    (``rmse_over_pcrb_<key>``; one standard error in ``rmse_over_pcrb_err_x1``/``_x2``)."""
+    errs = np.array([[o.metrics.rmse_steady[k] for k in HEAD_STATES] for o in kept])
+    bound, ratio, err = bound_against([o.bound for o in kept], kept[0].bound["prior"],
+                                      steady_step, errs)
+    pointing = float(np.hypot(bound[0], bound[1]))
+    out = {"pcrb_steady_x1": float(bound[0]), "pcrb_steady_x2": float(bound[2]),
+           "pcrb_steady_azimuth": float(bound[0]), "pcrb_steady_elevation": float(bound[1]),
+           "pcrb_steady_pointing": pointing}
+    if estimates and np.all(np.isfinite(ratio)):
+        for key, i in (("x1", 0), ("x2", 2)):
+            out[f"rmse_over_pcrb_{key}"] = float(ratio[i])
+            out[f"rmse_over_pcrb_err_{key}"] = float(err[i])
+        out["rmse_over_pcrb_azimuth"] = float(ratio[0])
+        out["rmse_over_pcrb_elevation"] = float(ratio[1])
+        steady = np.array([o.metrics.rmse_steady["pointing"] for o in kept])
+        out["rmse_over_pcrb_pointing"] = float(np.sqrt(np.mean(steady**2)) / pointing)
     return out

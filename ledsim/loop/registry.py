@@ -42,6 +42,30 @@ PHYSICS_SCENARIOS = {
 OMEGA_MODELS = ("identified", "simulator", "none")
 FILTER_DISTANCES = ("configured", "nominal")
 ACQUISITIONS = ("warm-up", "minimum-time")
+#: The receiver's gimbal (``--gimbal``) and its photodiodes (``--receiver``), which go
+#: together: the paper's yaw gimbal with its pair, or a pan-tilt head with a quad (a data
+#: detector on the boresight and four pointing photodiodes turned in azimuth and
+#: elevation: ``physics/layout.py:quad_layout``). Either flag alone sets the other.
+GIMBALS = {"yaw": "pair", "pan-tilt": "quad"}
+RECEIVERS = {receiver: gimbal for gimbal, receiver in GIMBALS.items()}
+#: The head when neither flag is given, every link alike (the pan-tilt default of a
+#: physical link waits for the two-axis supervisor: see docs/two_axes.md).
+DEFAULT_GIMBAL = "yaw"
+
+
+def head_of(gimbal: str | None, receiver: str | None) -> tuple[str, str]:
+    """(gimbal, receiver) as run from the flags given (None: not given): either one
+    given sets the other; neither, :data:`DEFAULT_GIMBAL` and its receiver."""
+    if gimbal is not None:
+        return gimbal, receiver or GIMBALS.get(gimbal, "pair")
+    if receiver is not None:
+        return RECEIVERS.get(receiver, DEFAULT_GIMBAL), receiver
+    return DEFAULT_GIMBAL, GIMBALS[DEFAULT_GIMBAL]
+
+
+#: The estimators a pan-tilt run takes: the shipped KKL (one per axis, on its pair's
+#: ratios), the four-state filters on the head's model and the oracle.
+TWO_AXIS_ESTIMATORS = ("kkl", "ekf", "ukf", "pf", "oracle")
 #: Largest |initial angle| [rad] a run may start at: the LED must stay in front of the
 #: photodiodes (|phi| < pi/2 with the photodiodes' offset to spare).
 MAX_INITIAL_ANGLE = 1.4

@@ -154,12 +154,14 @@ def _check_record(name: str, arrays: dict[str, np.ndarray]) -> dict[str, np.ndar
 
 
 def check_calls(name: str, arrays: dict[str, np.ndarray], n_state: int,
-                n_output: int) -> None:
-    """Refuse a record that the estimator of ``n_state`` states and ``n_output`` outputs
-    was not given: each call with its own number of arguments (``reset``: none, x0, or
-    x0 and its covariance), finite but for a missing sample, and estimates of its size."""
+                n_output: int, n_input: int = 1) -> None:
+    """Refuse a record that the estimator of ``n_state`` states, ``n_output`` outputs
+    and ``n_input`` inputs was not given: each call with its own number of arguments
+    (``reset``: none, x0, or x0 and its covariance), finite but for a missing sample,
+    and estimates of its size."""
     takes = {"seed_run": {1}, "reset": {0, n_state, n_state + n_state**2},
-             "update": {n_output}, "predict": {1}, "adapt_noise": {1, 1 + n_output}}
+             "update": {n_output}, "predict": {n_input},
+             "adapt_noise": {1, 1 + n_output}}
     kind, nargs, args = arrays["call_kind"], arrays["call_nargs"], arrays["call_args"]
     if arrays["call_out"].shape[1] != n_state:
         raise ReplayError(f"{name}: call_out has {arrays['call_out'].shape[1]} columns, "
@@ -204,6 +206,12 @@ def run_estimator(cfg: RunConfig):
     from ledsim.loop.build.estimation import identified_model, loop_estimator
     from ledsim.physics.gimbal_system import GimbalSystem
 
+    if cfg.world.two_axes:  # a pan-tilt head's, built as its run built it
+        from ledsim.loop.build.control import head_estimator, head_model
+        from ledsim.physics.head_system import HeadSystem
+
+        system = HeadSystem(cfg.world_config())
+        return head_estimator(cfg, system, head_model(cfg, identified_model(system)))
     system = GimbalSystem(cfg.world_config())
     est, _ = loop_estimator(cfg, system, identified_model(system))
     return est
@@ -219,7 +227,8 @@ def replay(path: str | Path, onnx: str | Path | None = None) -> ReplayResult:
     except (LedsimError, ObserverError) as e:  # its checkpoint or scene, say
         raise ReplayError(f"trace {str(path)!r}: its estimator cannot be rebuilt: {e}") \
             from None
-    check_calls(f"trace {str(path)!r}", arrays, est.system.n_state, est.system.n_output)
+    check_calls(f"trace {str(path)!r}", arrays, est.system.n_state, est.system.n_output,
+                est.system.n_input)
     if onnx is None:  # an estimate per update; the exported step gives one per predict
         worst, against, counted = replay_calls(est, arrays), "numpy", "update"
     else:

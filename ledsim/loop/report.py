@@ -3,7 +3,6 @@
 
 from __future__ import annotations
 
-import math
 from collections.abc import Callable
 from dataclasses import dataclass
 from pathlib import Path
@@ -16,29 +15,14 @@ from ledsim.files.results import DictAccess, write_json
 from ledsim.loop.build.estimation import check_checkpoint, saturates, served
 from ledsim.loop.closed_loop import run_batch
 from ledsim.loop.outcome import RunOutcome, Trace
+from ledsim.loop.over_seeds import (  # noqa: F401 (Stat and WINDOW_KEYS were here)
+    WINDOW_KEYS,
+    Stat,
+    per_axis,
+    summarize_windows,
+)
 from ledsim.loop.pcrb_runs import bound_summary
 from ledsim.loop.run_config import RunConfig
-from observer.metrics import mean_and_spread
-
-
-@dataclass
-class Stat(DictAccess):
-    """Mean and sample standard deviation over the seeds that have a value, and how
-    many did (``n``); ``mean`` is None when none did. NaN means undefined (an empty
-    steady-state window in a short run) and counts as no value."""
-
-    mean: float | None
-    std: float | None
-    n: int
-
-    @classmethod
-    def over(cls, values) -> Stat:
-        vals = [v for v in values if v is not None and not math.isnan(v)]
-        if not vals:
-            return cls(None, None, 0)
-        mean, spread = mean_and_spread(np.array(vals, dtype=float))
-        return cls(float(mean), float(spread), len(vals))
-
 
 #: Revision of ``results.json``'s layout: 2 added the physical link's keys (``link``,
 #: ``water``, ``attenuation``, ``received_power_w``) and this one; 3 the losses
@@ -77,7 +61,13 @@ class RunSummary(DictAccess):
     rad of the truth), and the estimator's restarts, per seed
     (:class:`~ledsim.loop.run_metrics.RunMetrics`); ``spec`` the whole run by its flat
     names (:meth:`~ledsim.loop.run_config.RunSpec.flat`), which
-    :meth:`~ledsim.loop.run_config.RunSpec.from_dict` reads back to rerun it."""
+    :meth:`~ledsim.loop.run_config.RunSpec.from_dict` reads back to rerun it; ``gimbal``
+    and ``receiver`` the head run (``yaw`` with the ``pair``, or ``pan-tilt`` with the
+    ``quad``), and on a pan-tilt head ``rmse_azimuth``, ``rmse_elevation`` and
+    ``rmse_pointing`` [rad] (the RMS angle between the estimated and the true direction)
+    with their ``rmse_steady_`` forms, beside ``rmse_x1``, the azimuth's, and the
+    four-state bound's ``pcrb_steady_azimuth``, ``_elevation``, ``_pointing`` [rad] with
+    the steady RMSE over each (``rmse_over_pcrb_azimuth``, ...) (None on one axis)."""
 
     scenario: str
     estimator: str
@@ -139,21 +129,20 @@ class RunSummary(DictAccess):
     reseeds: Stat | None = None
     spec: dict | None = None
     sea_depth: float | None = None
-
-
-#: The per-window metrics a summary gives over the seeds (:class:`WindowMetrics`).
-WINDOW_KEYS = ("availability", "fec_share", "mean_power", "hull_error_rms",
-               "navigation_error_rms", "rmse_x1", "lost_share", "silent_error_share",
-               "loss_events", "false_loss_events", "reseeds")
-
-
-def summarize_windows(outs: list[RunOutcome]) -> list[dict] | None:
-    """Each window's metrics over the seeds (None: the runs have no windows)."""
-    if not outs or outs[0].windows is None:
-        return None
-    return [{"start": w.start, "end": w.end,
-             **{k: Stat.over(getattr(o.windows[j], k) for o in outs) for k in WINDOW_KEYS}}
-            for j, w in enumerate(outs[0].windows)]
+    gimbal: str | None = None
+    receiver: str | None = None
+    rmse_azimuth: Stat | None = None
+    rmse_elevation: Stat | None = None
+    rmse_pointing: Stat | None = None
+    rmse_steady_azimuth: Stat | None = None
+    rmse_steady_elevation: Stat | None = None
+    rmse_steady_pointing: Stat | None = None
+    pcrb_steady_azimuth: float | None = None
+    pcrb_steady_elevation: float | None = None
+    pcrb_steady_pointing: float | None = None
+    rmse_over_pcrb_azimuth: float | None = None
+    rmse_over_pcrb_elevation: float | None = None
+    rmse_over_pcrb_pointing: float | None = None
 
 
 def summarize(cfg: RunConfig, outs: list[RunOutcome]) -> RunSummary:
@@ -209,7 +198,8 @@ def summarize(cfg: RunConfig, outs: list[RunOutcome]) -> RunSummary:
         receiver_dome=cfg.receiver_dome,
         loss_events=stat(lambda o: o.metrics.loss_events),
         false_loss_events=stat(lambda o: o.metrics.false_loss_events),
-        reseeds=stat(lambda o: o.metrics.reseeds), spec=cfg.flat(), sea_depth=cfg.sea_depth)
+        reseeds=stat(lambda o: o.metrics.reseeds), spec=cfg.flat(), sea_depth=cfg.sea_depth,
+        gimbal=cfg.world.head[0], receiver=cfg.world.head[1], **per_axis(outs))
 
 
 #: The most seeds one job steps together (a batch): larger batches gain little more

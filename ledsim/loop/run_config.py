@@ -5,8 +5,6 @@ from __future__ import annotations
 
 from dataclasses import dataclass, fields, replace
 
-from ledsim.agent.autopilot import StationKeeping
-from ledsim.constants import NavigationNoise
 from ledsim.experiment.scenario import Scenario
 from ledsim.loop.registry import (  # noqa: F401 (aliases: the choices where ledsim 0.2 had them)
     ACQUISITIONS,
@@ -20,87 +18,13 @@ from ledsim.loop.registry import (  # noqa: F401 (aliases: the choices where led
     peak_snr,
 )
 from ledsim.loop.validation import (
-    keeping_gains,
-    navigation_noise,
     run_from_dict,
     validate_run,
 )
+from ledsim.loop.world_part import WorldPart
 from ledsim.physics.disturbances import parse_disturbance
-from ledsim.physics.scene import DEFAULT_DEPTH, WorldConfig
-from ledsim.radiometry.link_presets import default_distance, link_constants, preset_named
-
-
-@dataclass(frozen=True)
-class WorldPart:
-    """The MuJoCo world of an experiment.
-
-    Attributes:
-        distance: link distance d [m] (None: the link preset's, 0.085 m on the paper's
-            bench).
-        torque_limit: gimbal motor torque limit [N m].
-        noise_scale: multiplies the measurement-noise standard deviation [-].
-        scene: MJCF scene file (None: the shipped one).
-        integrator: MuJoCo integrator of the world (``implicitfast``, ``euler``, ...).
-        station_keeping: the vehicle holds its pose on its thrusters, from its own
-            navigation (:class:`~ledsim.agent.autopilot.Vehicle`); off: it drifts.
-        imu_noise: ``key=value`` settings of the vehicle's sensors' noise
-            (:class:`~ledsim.constants.NavigationNoise`'s fields; the rest keep their
-            datasheet figures).
-        station_keeping_gains: ``key=value`` settings of the station keeping's gains
-            (:class:`~ledsim.agent.autopilot.StationKeeping`'s fields).
-        link: the link preset (:data:`ledsim.radiometry.link_presets.LINK_PRESETS`):
-            ``paper``, the paper's bench, or a real LED modem.
-        water: the water type (None: the preset's); ``attenuation``: its beam
-            attenuation c instead [1/m] (None: the type's).
-        bit_rate: the data's bit rate [bit/s] (None: the preset's).
-        depth: the receiver vehicle's depth below the still surface [m] (the waves'
-            decay, the daylight of ``flicker``, the surface in the video).
-        transmitter_depth: the LED's depth [m] (None: the receiver's).
-        receiver_dome: the receiver's head turns inside a dome, out of the water's flow
-            (``--receiver-dome``).
-        sea_depth: the sea's depth [m], where the seabed stands (None: below both ends).
-    """
-
-    distance: float | None = None
-    torque_limit: float = 0.05
-    noise_scale: float = 1.0
-    scene: str | None = None
-    integrator: str = "implicitfast"
-    station_keeping: bool = True
-    imu_noise: tuple[str, ...] = ()
-    station_keeping_gains: tuple[str, ...] = ()
-    link: str = "paper"
-    water: str | None = None
-    attenuation: float | None = None
-    bit_rate: float | None = None
-    depth: float = DEFAULT_DEPTH
-    transmitter_depth: float | None = None
-    receiver_dome: bool = False
-    sea_depth: float | None = None
-
-    def __post_init__(self) -> None:
-        if self.distance is None:  # the link preset's (0.085 m on the paper's bench)
-            object.__setattr__(self, "distance", default_distance(self.link))
-
-    def navigation_noise(self) -> NavigationNoise:
-        """The vehicle's sensors' noise: the defaults with ``imu_noise`` applied."""
-        return navigation_noise(self.imu_noise)
-
-    def keeping_gains(self) -> StationKeeping:
-        """The station keeping's gains: the defaults with ``station_keeping_gains``."""
-        return keeping_gains(self.station_keeping_gains)
-
-    def world_config(self, distance: float | None = None) -> WorldConfig:
-        """The MuJoCo world (at ``distance`` [m] instead, when given); its control period
-        Te is the link constants' (5 physics steps of 2 ms)."""
-        extra = {} if self.scene is None else {"xml": self.scene}
-        d = self.distance if distance is None else distance
-        return WorldConfig(constants=link_constants(self.link, d, self.water,
-                                                    self.attenuation),
-                           torque_limit=self.torque_limit, integrator=self.integrator,
-                           depth=self.depth, transmitter_depth=self.transmitter_depth,
-                           receiver_dome=self.receiver_dome, sea_depth=self.sea_depth,
-                           **extra)
+from ledsim.physics.scene import WorldConfig
+from ledsim.radiometry.link_presets import preset_named
 
 
 @dataclass(frozen=True)
@@ -122,6 +46,9 @@ class TaskPart:
         initial_angle: the true incidence angle phi at the start [rad], at rest (None:
             the scenario's); |phi| <= :data:`MAX_INITIAL_ANGLE`. Beyond about 0.6 rad the
             LED is outside the receiver's field of view.
+        initial_elevation: on a pan-tilt head, the true elevation of the LED from the
+            boresight at the start [rad] (0: the tilt starts pointed at the LED's
+            elevation, as the vehicle's navigation would put it).
     """
 
     scenario: str = "align"
@@ -129,6 +56,7 @@ class TaskPart:
     seconds: float | None = None
     supervision: bool = True
     initial_angle: float | None = None
+    initial_elevation: float = 0.0
     acquisition: str = "minimum-time"
 
 
@@ -214,7 +142,7 @@ class RunSpec:
             object.__setattr__(self, part, value)
 
     @classmethod
-    def of(cls, world: WorldPart = WorldPart(), task: TaskPart = TaskPart(),
+    def of(cls, world: WorldPart = WorldPart(), task: TaskPart = TaskPart(),  # noqa: B008
            estimation: EstimatorPart = EstimatorPart(),
            execution: ExecutionPart = ExecutionPart()) -> RunSpec:
         """The run made of these parts."""

@@ -40,7 +40,10 @@ class RunMetrics(DictAccess):
 
     Attributes:
         rmse, rmse_steady: RMSE of (x1 [rad], x2 [rad/s]) over the run and from the
-            scenario's steady-state start, keyed ``x1``, ``x2``.
+            scenario's steady-state start, keyed ``x1``, ``x2`` (the first axis's angle
+            and rate); on a pan-tilt head also per axis, ``azimuth``, ``elevation``
+            [rad], ``azimuth_rate``, ``elevation_rate`` [rad/s], and ``pointing``, the
+            RMS angle between the estimated and the true direction [rad].
         alignment_time: first time |phi - phi_ref| < 1 deg for 0.5 s [s] (None: never).
         availability: share of the run with P1 >= 90% of the most it could receive at
             that moment's geometry (distance and LED angle; a perfectly pointed
@@ -191,7 +194,10 @@ def run_metrics(x: np.ndarray, xhat: np.ndarray, power_clean: np.ndarray, steady
     e = rmse(xhat, x)
     es = rmse(xhat, x, int(round(steady_from / Te)))
     lay = constants.layout
-    aligned = np.abs(lay.angle(x) - intensity_maximum(constants)) < ALIGN_TOLERANCE
+    if lay.n_axes == 1:
+        aligned = np.abs(lay.angle(x) - intensity_maximum(constants)) < ALIGN_TOLERANCE
+    else:  # the data detector on the boresight: its peak is straight ahead
+        aligned = lay.pointing_error(np.zeros_like(x), x) < ALIGN_TOLERANCE
     p1 = lay.reference_power(power_clean)
     best = np.full(len(p1), peak_power(constants)) if power_max is None else power_max
     available, possible = availability_mask(p1, best, noise_std)
@@ -216,8 +222,8 @@ def run_metrics(x: np.ndarray, xhat: np.ndarray, power_clean: np.ndarray, steady
     pointed = after & possible & (True if occluded is None else ~np.asarray(occluded))
     loss = pointing_loss_db(best, p1, pointed)
     return RunMetrics(
-        rmse={"x1": float(e[0]), "x2": float(e[1])},
-        rmse_steady={"x1": float(es[0]), "x2": float(es[1])},
+        rmse=_rmse_keys(e, xhat, x, lay, 0),
+        rmse_steady=_rmse_keys(es, xhat, x, lay, int(round(steady_from / Te))),
         alignment_time=first_settled(aligned, Te),
         availability=float(np.mean(available)),
         mean_power=float(np.mean(p1)),
@@ -230,6 +236,21 @@ def run_metrics(x: np.ndarray, xhat: np.ndarray, power_clean: np.ndarray, steady
         else float(np.mean(np.asarray(outside)[after])),
         loss_events=int(steps.onset.sum()), false_loss_events=int(steps.false_onset.sum()),
         reseeds=int(steps.reseeded.sum()), **budget)
+
+
+def _rmse_keys(e: np.ndarray, xhat: np.ndarray, x: np.ndarray, lay, start: int) -> dict:
+    """The RMSE ``e`` of each state by name: ``x1`` and ``x2`` the first axis's angle
+    [rad] and rate [rad/s]; on a pan-tilt head also ``azimuth``, ``elevation`` [rad],
+    ``azimuth_rate``, ``elevation_rate`` [rad/s] and ``pointing`` [rad], the RMS of the
+    angle between the estimated and the true direction (from step ``start``)."""
+    n = lay.n_axes
+    keys = {"x1": float(e[0]), "x2": float(e[n])}
+    if n == 2:
+        keys.update(azimuth=float(e[0]), elevation=float(e[1]), azimuth_rate=float(e[2]),
+                    elevation_rate=float(e[3]))
+        err = lay.pointing_error(np.asarray(xhat)[start:], np.asarray(x)[start:])
+        keys["pointing"] = float(np.sqrt(np.mean(np.square(err)))) if err.size else math.nan
+    return keys
 
 
 def _delay_from(events: list, start: float) -> float | None:

@@ -22,12 +22,16 @@ from ledsim.experiment.estimators import LOOP_KKL_ESTIMATORS
 from ledsim.keyvalues import settings_of
 from ledsim.loop.registry import (
     ACQUISITIONS,
+    DEFAULT_GIMBAL,
     FILTER_DISTANCES,
+    GIMBALS,
     LOOP_ESTIMATORS,
     MAX_INITIAL_ANGLE,
     MIN_RUN_PEAK_SNR,
     OMEGA_MODELS,
     PHYSICS_SCENARIOS,
+    RECEIVERS,
+    TWO_AXIS_ESTIMATORS,
     peak_snr,
 )
 from ledsim.physics.disturbances import check_sea, check_timing, parse_disturbance
@@ -63,10 +67,25 @@ def validate_run(cfg) -> None:
                                   ("--filter-distance", cfg.filter_distance,
                                    FILTER_DISTANCES),
                                   ("--acquisition", cfg.acquisition, ACQUISITIONS),
-                                  ("--link", cfg.link, LINK_PRESETS)):
+                                  ("--link", cfg.link, LINK_PRESETS),
+                                  ("--gimbal", cfg.gimbal or DEFAULT_GIMBAL, GIMBALS),
+                                  ("--receiver", cfg.receiver or "pair", RECEIVERS)):
         if value not in registry:
             raise LedsimError(f"unknown {flag.lstrip('-')} {value!r}: choose one of "
                               f"{', '.join(registry)}")
+    gimbal, receiver = cfg.world.head
+    if GIMBALS[gimbal] != receiver:
+        raise LedsimError(f"--receiver {receiver} does not fit --gimbal {gimbal}: the "
+                          f"{gimbal} gimbal carries the {GIMBALS[gimbal]} (the "
+                          f"{receiver} needs --gimbal {RECEIVERS[receiver]})")
+    if cfg.world.two_axes:
+        _check_two_axes(cfg)
+    elif cfg.channel_mismatch:
+        raise LedsimError(f"--channel-mismatch {cfg.channel_mismatch:g} is not allowed "
+                          "with --receiver pair: it mismatches the quad's pointing pairs")
+    elif cfg.initial_elevation != 0.0:
+        raise LedsimError(f"--initial-elevation {cfg.initial_elevation:g} is not allowed "
+                          "with --gimbal yaw: only a pan-tilt head turns in elevation")
     if cfg.water is not None and cfg.water not in WATER_TYPES:
         raise LedsimError(f"unknown water {cfg.water!r}: choose one of "
                           f"{', '.join(WATER_TYPES)}")
@@ -109,6 +128,11 @@ def validate_run(cfg) -> None:
         checks.append(("--initial-angle", cfg.initial_angle,
                        abs(cfg.initial_angle) <= MAX_INITIAL_ANGLE,
                        f"in [-{MAX_INITIAL_ANGLE:g}, {MAX_INITIAL_ANGLE:g}] rad"))
+    checks.append(("--channel-mismatch", cfg.channel_mismatch,
+                   0.0 <= cfg.channel_mismatch <= 0.5, "in [0, 0.5]"))
+    checks.append(("--initial-elevation", cfg.initial_elevation,
+                   abs(cfg.initial_elevation) <= MAX_INITIAL_ANGLE,
+                   f"in [-{MAX_INITIAL_ANGLE:g}, {MAX_INITIAL_ANGLE:g}] rad"))
     if cfg.attenuation is not None:
         checks.append(("--attenuation", cfg.attenuation, 0 <= cfg.attenuation <= 100,
                        "in [0, 100] 1/m"))
@@ -150,6 +174,23 @@ def validate_run(cfg) -> None:
                           f"under {MIN_RUN_PEAK_SNR:g}; a shorter --distance, clearer "
                           "water or a lower --noise-scale")
     check_world(world)
+
+
+def _check_two_axes(cfg) -> None:
+    """What a pan-tilt run does not take (yet), refused in one line."""
+    if cfg.link == "paper":
+        raise LedsimError("--gimbal pan-tilt is not allowed with --link paper: the paper's "
+                          "bench measures its photodiodes' response about the hinge alone, "
+                          "so no photodiode sees the tilt (choose a physical --link)")
+    if cfg.estimator not in TWO_AXIS_ESTIMATORS:
+        raise LedsimError(f"estimator {cfg.estimator!r} is not allowed with --gimbal "
+                          f"pan-tilt: choose one of {', '.join(TWO_AXIS_ESTIMATORS)}")
+    if cfg.filter_distance != "configured":
+        raise LedsimError(f"--filter-distance {cfg.filter_distance} is not allowed with "
+                          "--gimbal pan-tilt: its filters know the configured distance")
+    if cfg.checkpoint:
+        raise LedsimError("--checkpoint is not allowed with --gimbal pan-tilt: its KKL "
+                          "is the shipped pair of one-axis observers")
 
 
 @functools.lru_cache(maxsize=32)

@@ -51,6 +51,7 @@ class AxisRatioModel(DiscreteSystem):
                        [head.process_noise_std[axis], head.process_noise_std[2 + axis]],
                        MeasurementNoise(std, 2))
         self._coef = (head.coef_angle[axis], head.coef_rate[axis])
+        self._fix_grid = None  # (log ratio difference, angle) for fix(), built once
 
     def _ratios(self, angle) -> np.ndarray:
         r = self.constants.receiver
@@ -67,6 +68,44 @@ class AxisRatioModel(DiscreteSystem):
     def h(self, x):
         angle, _ = np.moveaxis(np.asarray(x, dtype=float), -1, 0)
         return self._ratios(angle)
+
+    def metadata(self) -> dict:
+        """The system's dimensions and box, and what its ratios are of: the axis, the
+        pair's turns [rad] and the receiver's response (a checkpoint is checked
+        against them)."""
+        meta = super().metadata()
+        meta.update(axis=self.axis, turns=[float(d) for d in self.turns],
+                    receiver=dict(vars(self.constants.receiver)))
+        return meta
+
+    def fix(self, y, tolerance: float = 0.1) -> float | None:
+        """The axis's angle [rad] straight from the head's powers ``y`` [W]: the pair's
+        log ratio difference, log(P_plus / P_minus), is monotonic in the angle over the
+        field of view (for the physical receiver's Gaussian, -4 d angle / c1^2), so it is
+        inverted on a grid. None: a power is missing or not positive, the value is off
+        the grid's range, or the powers disagree with one direction (the pair's log
+        product off the receiver's by more than ``tolerance``: a shaded photodiode)."""
+        ratios = self.split(y)
+        if not (np.all(np.isfinite(ratios)) and np.all(ratios > 0)):
+            return None
+        if self._fix_grid is None:
+            angle = np.linspace(-0.8, 0.8, 1601)
+            r = self._ratios(angle)
+            v = np.log(r[:, 0]) - np.log(r[:, 1])
+            order = np.argsort(v)
+            self._fix_grid = (v[order], angle[order])
+        v, angle = self._fix_grid
+        value = float(np.log(ratios[0]) - np.log(ratios[1]))
+        if not v[0] <= value <= v[-1]:
+            return None
+        fix = float(np.interp(value, v, angle))
+        # The pair's product over the detector's square is the receiver's own at the fix
+        # (for a Gaussian a constant, exp(-2 d^2 / c1^2)): a photodiode that an edge
+        # shades, or that the light outside the beam fills, breaks it.
+        expected = float(np.sum(np.log(self._ratios(np.array([fix]))[0])))
+        if abs(float(np.log(ratios[0]) + np.log(ratios[1])) - expected) > tolerance:
+            return None
+        return fix
 
     def split(self, y) -> np.ndarray:
         """This axis's outputs from the head's powers ``y`` [W], each channel first

@@ -207,11 +207,12 @@ class HeadModel(DiscreteSystem):
 
     @classmethod
     def fit(cls, world: LinkWorld, n: int = 2000, seed: int = 0, u_max: float = 20.0,
-            noise_scale: float = 1.0) -> HeadModel:
+            noise_scale: float = 1.0, home=(0.0, 0.0)) -> HeadModel:
         """Least squares on ``n`` random one-step transitions of ``world`` (a pan-tilt
         head, its hull at rest at home), each axis at a random angle and rate in the
         box and a random input within +-``u_max`` [rad/s^2]; the gain from its sensor's
-        noise-free powers over the box."""
+        noise-free powers over the box. ``home``: the encoders' angles [rad] at which
+        the boresight looks at the LED (x = home - q; zero for a level LED)."""
         from ledsim.physics.sensor import IrradianceSensor
 
         c = world.config.constants
@@ -220,11 +221,12 @@ class HeadModel(DiscreteSystem):
         x = rng.uniform(-0.5, 0.5, size=(n, 4))
         u = rng.uniform(-u_max, u_max, size=(n, 2))
         xn = np.empty_like(x)
-        for k in range(n):  # angle = -q: the encoder's home at the boresight
-            world.reset(gimbal_angle=-x[k, :2], gimbal_rate=-x[k, 2:])
+        home = np.asarray(home, dtype=float)
+        for k in range(n):  # angle = home - q
+            world.reset(gimbal_angle=home - x[k, :2], gimbal_rate=-x[k, 2:])
             world.set_torques(-inertia * u[k])
             world.step()
-            xn[k] = np.r_[-world.gimbal_angles, -world.gimbal_rates]
+            xn[k] = np.r_[home - world.gimbal_angles, -world.gimbal_rates]
         coef_angle, coef_rate = np.empty((2, 3)), np.empty((2, 3))
         for a in range(2):
             rate = x[:, 2 + a]
@@ -236,11 +238,12 @@ class HeadModel(DiscreteSystem):
         y, g = [], []
         for pan in grid:
             for tilt in grid:
-                world.reset(gimbal_angle=np.array([pan, tilt]), gimbal_rate=np.zeros(2))
+                world.reset(gimbal_angle=home + np.array([pan, tilt]),
+                            gimbal_rate=np.zeros(2))
                 y.append(sensor.read(noise=False).power_clean)
                 g.append(head_power(1.0, -pan, -tilt, c))
         y, g = np.array(y), np.array(g)
         gain = float((g * y).sum() / (g * g).sum())
-        world.reset(gimbal_angle=np.zeros(2), gimbal_rate=np.zeros(2))
+        world.reset(gimbal_angle=home, gimbal_rate=np.zeros(2))
         return cls(c, coef_angle, coef_rate, gain, inertia, noise_scale=noise_scale)
 

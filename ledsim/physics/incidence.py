@@ -70,3 +70,43 @@ def incidence_rate(sight, velocity, transmitter, hinge):
     los_rate = ((ly * rz - lz * ry) * hx + (lz * rx - lx * rz) * hy
                 + (lx * ry - ly * rx) * hz) / d2
     return los_rate - (wx * hx + wy * hy + wz * hz)
+
+
+def head_rates(o, sight, velocity, transmitter, up, normal):
+    """(d(azimuth)/dt, d(elevation)/dt) [rad/s] of a photodiode on a pan-tilt head: the
+    line of sight's turn in the photodiode's own frame (normal, up), whose up turns with
+    it (exact for a photodiode that looks along its head's boresight, as the data
+    detector does).
+
+    The azimuth is :func:`incidence_geometry`'s phi about ``up``, atan2((n x s).u, n.s),
+    and the elevation asin(s.u), with s the unit line of sight. Its turn in the frame is
+    m = ds/dt - w x s, ds/dt = (r - s (s.r)) / d, r the LED's velocity less the
+    photodiode's.
+
+    Args:
+        sight: LED - photodiode [m]; velocity: the photodiode's (angular [rad/s],
+            linear [m/s]) velocity (``mj_objectVelocity``'s order); transmitter: the
+            LED's linear velocity [m/s]; up, normal: the photodiode's unit up and normal
+            (:func:`photodiode_up`). Each a triple.
+    """
+    lx, ly, lz = sight
+    wx, wy, wz, vx, vy, vz = velocity
+    rx, ry, rz = transmitter[0] - vx, transmitter[1] - vy, transmitter[2] - vz
+    ux, uy, uz = up
+    nx, ny, nz = normal
+    d = o.sqrt(lx * lx + ly * ly + lz * lz)
+    sx, sy, sz = lx / d, ly / d, lz / d
+    sr = sx * rx + sy * ry + sz * rz
+    # m = (r - s (s.r)) / d - w x s
+    mx = (rx - sx * sr) / d - (wy * sz - wz * sy)
+    my = (ry - sy * sr) / d - (wz * sx - wx * sz)
+    mz = (rz - sz * sr) / d - (wx * sy - wy * sx)
+    # the azimuth: atan2(a, b) with a = (n x s).u, b = n.s
+    a = (ny * sz - nz * sy) * ux + (nz * sx - nx * sz) * uy + (nx * sy - ny * sx) * uz
+    da = (ny * mz - nz * my) * ux + (nz * mx - nx * mz) * uy + (nx * my - ny * mx) * uz
+    b = nx * sx + ny * sy + nz * sz
+    db = nx * mx + ny * my + nz * mz
+    azimuth_rate = (da * b - a * db) / (a * a + b * b)
+    e = sx * ux + sy * uy + sz * uz  # sin(elevation)
+    elevation_rate = (mx * ux + my * uy + mz * uz) / o.sqrt(1.0 - e * e)
+    return azimuth_rate, elevation_rate

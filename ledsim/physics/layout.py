@@ -190,9 +190,21 @@ class ReceiverLayout:
         the first axis: shape ``(n_axes,) + x.shape[:-1]``."""
         return np.moveaxis(np.asarray(x)[..., :self.n_axes], -1, 0)
 
+    def rates(self, x) -> np.ndarray:
+        """Every axis's rate [rad/s] of states ``x``, the axes on the first axis."""
+        return np.moveaxis(np.asarray(x)[..., self.n_axes:], -1, 0)
+
     def rate(self, x) -> np.ndarray:
         """The first axis's rate [rad/s] of states ``x`` (last axis the state)."""
-        return np.asarray(x)[..., 1]
+        return np.asarray(x)[..., self.n_axes]
+
+    def pointing_error(self, xhat, x) -> np.ndarray:
+        """How far the estimates ``xhat`` point from the states ``x`` [rad]: on one axis
+        the signed angle error, on more the angle between the two directions to first
+        order (the root of the axes' squared errors)."""
+        if self.n_axes == 1:
+            return self.angle(xhat) - self.angle(x)
+        return np.sqrt(np.sum(np.square(self.angles(xhat) - self.angles(x)), axis=0))
 
 
 #: The paper's gimbal: one vertical hinge (azimuth), its motor and its encoder.

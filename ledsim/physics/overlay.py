@@ -18,6 +18,8 @@ STATUS_BADGES = {"ok": ("LINK OK", (90, 220, 120)),
 TEXT = (230, 230, 230)
 GRID = (70, 85, 95)
 TRUE, ESTIMATE, P2 = (255, 255, 255), (80, 200, 255), (255, 170, 60)
+#: A pan-tilt head's elevation, true and estimated.
+ELEVATION, ELEVATION_ESTIMATE = (120, 230, 120), (255, 110, 200)
 
 
 def axis_limits(values, base: tuple[float, float], step: float) -> tuple[float, float]:
@@ -44,7 +46,8 @@ def power_unit(peak: float) -> tuple[float, str]:
 
 
 class Overlay:
-    """Panel with the time and scrolling traces of phi and of P1, P2.
+    """Panel with the time and scrolling traces of phi and of P1, P2 (a pan-tilt head's
+    azimuth and elevation, and its data detector's and one pointing photodiode's powers).
 
     Args:
         width, height: frame size [px].
@@ -61,6 +64,10 @@ class Overlay:
         self.seconds = seconds_shown
         self.n = max(2, int(round(seconds_shown / sample_period)) + 1)
         self.phi, self.phihat, self.p1, self.p2 = (deque(maxlen=self.n) for _ in range(4))
+        # a pan-tilt head's elevation, true and estimated (empty on one axis)
+        self.elevation, self.elevation_hat = deque(maxlen=self.n), deque(maxlen=self.n)
+        #: the two powers' names (a quad's: its data detector and a pointing photodiode)
+        self.names = ("P1", "P2")
         self.label = label
         self.estimate = estimate
         size = self.font_px = max(10, height // 40)
@@ -72,9 +79,15 @@ class Overlay:
     status = ""
     vehicle = ""  # a line on the vehicle (IMU, hull offset, thrust) under the time
 
-    def push(self, phi: float, phihat: float, p1: float, p2: float) -> None:
+    def push(self, phi: float, phihat: float, p1: float, p2: float,
+             elevation: float | None = None, elevation_hat: float | None = None) -> None:
+        """One step: phi (a pan-tilt's azimuth) true and estimated [rad], two powers
+        [W], and on a pan-tilt head its elevation true and estimated [rad]."""
         for q, v in ((self.phi, phi), (self.phihat, phihat), (self.p1, p1), (self.p2, p2)):
             q.append(v)
+        if elevation is not None:
+            self.elevation.append(elevation)
+            self.elevation_hat.append(np.nan if elevation_hat is None else elevation_hat)
 
     def draw(self, frame: np.ndarray, t: float, peak_power: float) -> np.ndarray:
         y0 = self.h - self.panel_h
@@ -88,7 +101,8 @@ class Overlay:
         # Scaled to the true angle: an estimate not yet handed over (a minimum-time
         # acquisition's first 0.2 s) swings by radians and flattened the rest; it is
         # clipped at the panel's edge instead.
-        lim_phi = axis_limits(np.asarray(list(self.phi)), (-0.5, 0.5), 0.5)
+        lim_phi = axis_limits(np.asarray(list(self.phi) + list(self.elevation)), (-0.5, 0.5),
+                              0.5)
         lim_p = axis_limits(np.concatenate([list(self.p1), list(self.p2)]),
                             (-0.1 * peak_power, 1.1 * peak_power), 0.5 * peak_power)
         self._axes(d, boxes[0], lim_phi, "{:+.1f}", zero=True)
@@ -97,12 +111,21 @@ class Overlay:
         self._trace(d, boxes[0], self.phi, lim_phi, TRUE)
         if self.estimate:
             self._trace(d, boxes[0], self.phihat, lim_phi, ESTIMATE)
+        if self.elevation:
+            self._trace(d, boxes[0], self.elevation, lim_phi, ELEVATION)
+            if self.estimate:
+                self._trace(d, boxes[0], self.elevation_hat, lim_phi, ELEVATION_ESTIMATE)
+            legend = "azimuth (white), elevation (green) [rad]" + (
+                "; estimates (blue, pink)" if self.estimate else "")
+        else:
+            legend = "phi [rad]: true (white)" + (", estimate (blue)" if self.estimate
+                                                  else "")
         self._trace(d, boxes[1], self.p1, lim_p, ESTIMATE)
         self._trace(d, boxes[1], self.p2, lim_p, P2)
-        legend = "phi [rad]: true (white)" + (", estimate (blue)" if self.estimate else "")
         d.text((8, y0 + 4), legend, fill=TEXT, font=self.font)
-        d.text((half + 8, y0 + 4), f"power [{unit}]: P1 (blue), P2 (orange)", fill=TEXT,
-               font=self.font)
+        first, second = self.names
+        d.text((half + 8, y0 + 4), f"power [{unit}]: {first} (blue), {second} (orange)",
+               fill=TEXT, font=self.font)
         d.text((8, 6), f"t = {t:5.2f} s   {self.label}", fill=(255, 255, 255), font=self.font)
         if self.vehicle:
             d.text((8, 10 + self.font_px), self.vehicle, fill=TEXT, font=self.font)

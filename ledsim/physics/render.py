@@ -194,8 +194,16 @@ class FrameRecorder:
         """Record step ``t`` [s]; ``status``: the link supervisor's "ok", "lost" or
         "scanning", or "dropout" while the gate holds a blocked photodiode ("" when the
         run is not supervised)."""
-        phihat = float(world.config.constants.layout.angle(xhat))
-        self.overlay.push(reading.phi, phihat, *reading.power)
+        layout = world.config.constants.layout
+        if layout.n_axes == 2:  # a pan-tilt head: both angles, the data and one pointing
+            azimuth, elevation = layout.angles(xhat)
+            ref = layout.reference
+            self.overlay.names = tuple(layout.photodiodes[i].series.upper()
+                                       for i in (ref, ref + 1))
+            self.overlay.push(reading.phi, float(azimuth), reading.power[ref],
+                              reading.power[ref + 1], reading.elevation, float(elevation))
+        else:
+            self.overlay.push(reading.phi, float(layout.angle(xhat)), *reading.power)
         self.overlay.status = status
         if t + 1e-9 < self.next_t:
             return

@@ -16,13 +16,18 @@ Rays ignore geom group 3 (lenses, LED housing) and the gimbal's own body.
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 
-import mujoco
 import numpy as np
 
-from ledsim.physics.incidence import incidence_geometry, incidence_rate, photodiode_up
-from ledsim.physics.world import RAY_GROUPS, LinkWorld, WorldError
+from ledsim.physics.incidence import (
+    head_rates,
+    incidence_geometry,
+    incidence_rate,
+    photodiode_up,
+)
+from ledsim.physics.line_of_sight import check_line_of_sight
+from ledsim.physics.world import LinkWorld
 from ledsim.radiometry.optics import (
     received_power,
     receiver_response_at,
@@ -49,6 +54,9 @@ class SensorReading:
             [rad, rad/s].
         gimbal_angle, gimbal_rate: the gimbal encoder: hinge angle [rad] and rate [rad/s].
         hull_pos: the AUV's position [m], shape (3,).
+        elevation, elevation_rate: on a pan-tilt head, the reference photodiode's
+            elevation [rad] and its rate [rad/s], and phidot is its azimuth's rate about
+            its own up (:func:`~ledsim.physics.incidence.head_rates`); None on one axis.
     """
 
     power: np.ndarray
@@ -62,11 +70,16 @@ class SensorReading:
     gimbal_angle: float
     gimbal_rate: float
     hull_pos: np.ndarray
+    elevation: float | None = field(default=None, kw_only=True)
+    elevation_rate: float | None = field(default=None, kw_only=True)
 
     @property
     def x(self) -> np.ndarray:
-        """The true state (phi [rad], phidot [rad/s]) of photodiode 1."""
-        return np.array([self.phi, self.phidot])
+        """The true state of the reference photodiode: (phi [rad], phidot [rad/s]), or
+        on a pan-tilt head (azimuth, elevation [rad], their rates [rad/s])."""
+        if self.elevation is None:
+            return np.array([self.phi, self.phidot])
+        return np.array([self.phi, self.elevation, self.phidot, self.elevation_rate])
 
 
 class IrradianceSensor:
@@ -101,6 +114,7 @@ class IrradianceSensor:
         self._photodiodes = range(self.layout.n_photodiodes)
         self._reference = self.layout.reference
         self._tilted = self.layout.tilted
+        self._head = self.layout.n_axes == 2  # a pan-tilt head: its reading's elevation
         n = world.config.n_rays
         ring = max(n - 1, 0)
         angles = 2 * np.pi * np.arange(ring) / max(ring, 1)
@@ -108,59 +122,7 @@ class IrradianceSensor:
         self._aperture = np.zeros((n, 3))
         self._aperture[1:, 0] = world.config.aperture_radius * np.cos(angles)
         self._aperture[1:, 1] = world.config.aperture_radius * np.sin(angles)
-        self._check_line_of_sight()
-
-    def _check_line_of_sight(self) -> None:
-        """Refuse geometries where the LED can never be seen (behind, or walled off)."""
-        w = self.world
-        with w.parked_occluder():  # only the scene itself counts
-            reading = self.read(noise=False)
-        led = np.round(w.led_pos, 4).tolist()
-        for i, pd in zip(self._photodiodes, self.layout.photodiodes, strict=True):
-            name = f"photodiode {pd.site!r}"
-            if abs(reading.incidence_angle[i]) >= math.pi / 2:
-                raise WorldError(f"LED at {led} m is behind {name} (incidence "
-                                 f"angle {reading.incidence_angle[i]:.2f} rad): no line of "
-                                 "sight is possible")
-            if reading.emission_angle[i] >= math.pi / 2:
-                raise WorldError(f"LED at {led} m faces away from {name} "
-                                 f"(emission angle {reading.emission_angle[i]:.2f} rad): no "
-                                 "line of sight")
-            if reading.visible_fraction[i] < 1:  # grazing too: the scene cuts the beam
-                hidden = "hidden" if reading.visible_fraction[i] == 0 else \
-                    f"{1 - reading.visible_fraction[i]:.0%} hidden"
-                raise WorldError(f"the LED, {self._led_depth():g} m deep, is {hidden} from "
-                                 f"{name} by {self._blocker(i)}: no clear line of sight")
-
-    def _led_depth(self) -> float:
-        """The LED's depth under the still surface [m]."""
-        w = self.world
-        return round(float(w.initial_hull_pos[2] + w.config.depth - w.led_pos[2]), 3)
-
-    def _blocker(self, i: int) -> str:
-        """What in the scene cuts a ray from photodiode ``i`` to the LED's aperture: the
-        seabed, the receiver's hull, or the scene's geom by name."""
-        w = self.world
-        m, origin = w.model, w.photodiode_pos(i)
-        geom = np.zeros(1, dtype=np.int32)
-        for point in self.aperture_points():
-            ray = point - origin
-            length = float(np.linalg.norm(ray))
-            hit = mujoco.mj_ray(m, w.data, origin, ray / length, RAY_GROUPS, 1,
-                                w.ids.gimbal_body, geom)
-            if 0.0 <= hit < length:
-                break
-        else:
-            return "the scene"
-        name = mujoco.mj_id2name(m, mujoco.mjtObj.mjOBJ_GEOM, int(geom[0])) or ""
-        body = int(m.geom_bodyid[geom[0]])
-        if name == "seabed":
-            return "the seabed (sea_depth, or 2.5 m under the deeper end by default)"
-        if body == w.ids.hull_body or int(m.body_rootid[body]) == \
-                int(m.body_rootid[w.ids.hull_body]):
-            return "the receiver's own vehicle (its hull stands in the beam)"
-        label = name or mujoco.mj_id2name(m, mujoco.mjtObj.mjOBJ_BODY, body) or f"#{body}"
-        return f"the scene's {label!r}"
+        check_line_of_sight(self)
 
     def aperture_points(self) -> np.ndarray:
         """World positions of the aperture sample points, shape (n_rays, 3)."""
@@ -231,6 +193,11 @@ class IrradianceSensor:
             clean = clean * w.light_gain
         measured = self.calibrated(clean)
         power = self.noisy(measured) if noise else measured + 0.0
+        if self._head:
+            rate, elevation, elevation_rate = self.head_truth()
+            return SensorReading(power, clean, phi, theta, dist, vis, float(phi[ref]), rate,
+                                 w.gimbal_angle, w.gimbal_rate, w.hull_pos.copy(),
+                                 elevation=elevation, elevation_rate=elevation_rate)
         return SensorReading(power, clean, phi, theta, dist, vis, float(phi[ref]),
                              self.incidence_rate(ref), w.gimbal_angle, w.gimbal_rate,
                              w.hull_pos.copy())
@@ -290,6 +257,18 @@ class IrradianceSensor:
         measures only about the hinge (1)."""
         return np.array([receiver_response_at(e, self.constants.receiver)
                          for e in self.elevation()])
+
+    def head_truth(self) -> tuple[float, float, float]:
+        """On a pan-tilt head, the reference photodiode's azimuth rate [rad/s],
+        elevation [rad] and elevation rate [rad/s]
+        (:func:`~ledsim.physics.incidence.head_rates`)."""
+        w, i = self.world, self._reference
+        normal = w.photodiode_normal(i).tolist()
+        up = self._up(normal, w.hinge_axis.tolist())
+        az_rate, el_rate = head_rates(FLOATS, (w.led_pos - w.photodiode_pos(i)).tolist(),
+                                      w.photodiode_velocity(i).tolist(),
+                                      w.transmitter_velocity.tolist(), up, normal)
+        return az_rate, self._tilted_elevation()[i], el_rate
 
     def incidence_rate(self, i: int) -> float:
         """d(phi_i)/dt [rad/s]: line-of-sight rotation minus photodiode rotation, about the

@@ -48,6 +48,7 @@ class SensorRows:
         self.constants = s0.constants
         self.reference = s0.layout.reference
         self._tilted = s0.layout.tilted
+        self._head = s0.layout.n_axes == 2
         self._radius = self.worlds[0].config.aperture_radius
         self._velocity = np.empty((len(self.sensors), 6))
         w0 = self.worlds[0]
@@ -78,6 +79,9 @@ class SensorRows:
         # The encoders and hulls as the gather read them (each world's own values).
         angles, speeds, hulls = p.qpos_hinge.tolist(), p.qvel_hinge.tolist(), p.hull_pos.copy()
         readings = []
+        if self._head:  # each world's own head's truth, as its sensor reads it alone
+            return [self._head_reading(n, s, clean[n], phi, theta, dist, vis, angles, speeds,
+                                       hulls) for n, s in enumerate(self.sensors)]
         for n, s in enumerate(self.sensors):
             w = s.world
             row = clean[n]
@@ -90,6 +94,20 @@ class SensorRows:
                                           float(phi[n, self.reference]), float(rates[n]),
                                           angles[n], speeds[n], hulls[n]))
         return readings
+
+    def _head_reading(self, n, s, row, phi, theta, dist, vis, angles, speeds, hulls):
+        """World ``n``'s reading on a pan-tilt head (its truth by
+        :meth:`IrradianceSensor.head_truth`)."""
+        w, c = s.world, self.constants
+        if c.link is not None:
+            row = row * s.elevation_response()
+        if w.light_gain is not None:
+            row = row * w.light_gain
+        rate, elevation, elevation_rate = s.head_truth()
+        return SensorReading(s.noisy(s.calibrated(row)), row, phi[n], theta[n], dist[n],
+                             vis[n], float(phi[n, self.reference]), rate, angles[n],
+                             speeds[n], hulls[n], elevation=elevation,
+                             elevation_rate=elevation_rate)
 
     def _reference_rates(self) -> np.ndarray:
         """:meth:`IrradianceSensor.incidence_rate` of each world's reference photodiode."""

@@ -87,7 +87,9 @@ class SimulationResult(SensorReading):
         fraction of each photodiode; ``state`` (the true state) and ``gimbal`` (the
         encoder's angle and rate) (N, n_state), named by ``layout`` (None: the paper's)."""
         lay = LinkConstants().layout if layout is None else layout
-        return cls(t=t, phi=lay.angle(state), phidot=lay.rate(state),
+        head = {} if lay.n_axes != 2 else {"elevation": lay.angles(state)[1],
+                                           "elevation_rate": lay.rates(state)[1]}
+        return cls(t=t, phi=lay.angle(state), phidot=lay.rate(state), **head,
                    gimbal_angle=lay.angle(gimbal), gimbal_rate=lay.rate(gimbal),
                    torque=torque, power=power,
                    power_clean=power_clean, incidence_angle=geo[:, 2],
@@ -96,7 +98,11 @@ class SimulationResult(SensorReading):
 
     @property
     def x(self) -> np.ndarray:
-        """True state (phi, phidot), shape (N, 2)."""
+        """True state (phi, phidot), shape (N, 2); on a pan-tilt head (azimuth,
+        elevation, their rates), shape (N, 4)."""
+        if self.elevation is not None:
+            return np.stack([self.phi, self.elevation, self.phidot, self.elevation_rate],
+                            axis=-1)
         return np.stack([self.phi, self.phidot], axis=-1)
 
     def arrays(self) -> dict[str, np.ndarray]:

@@ -20,7 +20,7 @@ from dataclasses import dataclass
 
 from ledsim.agent.autopilot import Vehicle
 from ledsim.agent.step import ControlStep
-from ledsim.loop.build.control import control_step
+from ledsim.loop.build.control import control_step, head_control_step
 from ledsim.loop.build.estimation import identified_model, run_noise
 from ledsim.loop.build.start import start_world
 from ledsim.loop.build.worlds import build_worlds
@@ -28,6 +28,7 @@ from ledsim.loop.outcome import Judging
 from ledsim.loop.run_config import RunConfig
 from ledsim.physics.disturbances import parse_disturbance
 from ledsim.physics.gimbal_system import GimbalSystem, IdentifiedGimbalModel
+from ledsim.physics.head_system import HeadSystem
 from ledsim.physics.sensor import IrradianceSensor, SensorReading
 from ledsim.physics.world import LinkWorld
 from observer.noise import MeasurementNoise
@@ -77,7 +78,8 @@ class BuiltRun:
 def build_run(cfg: RunConfig, seeds: Sequence[int], record: bool = False) -> BuiltRun:
     """The runs of ``cfg`` for ``seeds`` (see the module's text); ``record``: each
     estimator keeps what it is given (to replay it)."""
-    system = GimbalSystem(cfg.world_config())
+    two = cfg.world.two_axes
+    system = (HeadSystem if two else GimbalSystem)(cfg.world_config())
     model = identified_model(system)
     steps = int(round(cfg.run_seconds / system.Te))
     # The system's world serves the first run; the others share its model unless a
@@ -88,7 +90,8 @@ def build_run(cfg: RunConfig, seeds: Sequence[int], record: bool = False) -> Bui
             for s, w in zip(seeds, worlds, strict=True)]
     judging = Judging(cfg.noise_scale, cfg.data_bit_rate, cfg.scenario_spec.warmup,
                       cfg.steady_from)
-    return BuiltRun(system, model, steps, runs, judging, cfg.flat(), cfg.imu)
+    # The vehicle's line of sight turns the pan alone: not fed to a pan-tilt head yet.
+    return BuiltRun(system, model, steps, runs, judging, cfg.flat(), cfg.imu and not two)
 
 
 def build_seed(cfg: RunConfig, system: GimbalSystem, model, seed: int, world: LinkWorld,
@@ -97,6 +100,10 @@ def build_seed(cfg: RunConfig, system: GimbalSystem, model, seed: int, world: Li
     noise = run_noise(cfg, system)
     sensor, disturbances, vehicle = start_world(cfg, system, world, seed, noise=noise)
     latest = Latest()
-    step = control_step(cfg, system, model, seed, world.gimbal_angle,
-                        lambda: latest.reading.x, record, noise)
+    if isinstance(system, HeadSystem):
+        step = head_control_step(cfg, system, model, seed, lambda: latest.reading.x,
+                                 record, noise)
+    else:
+        step = control_step(cfg, system, model, seed, world.gimbal_angle,
+                            lambda: latest.reading.x, record, noise)
     return SeedRun(seed, world, noise, sensor, disturbances, vehicle, step, latest)

@@ -11,13 +11,19 @@ from collections.abc import Callable
 import numpy as np
 
 from ledsim.agent.gate import DropoutGate
+from ledsim.agent.head_supervisor import HeadSupervisor
 from ledsim.agent.laws import intensity_maximum
 from ledsim.agent.slew import TimeOptimalSlew
 from ledsim.agent.step import ControlStep, GimbalMotor, Unsupervised
 from ledsim.agent.supervisor import LinkSupervisor
+from ledsim.experiment.estimators import build_estimator
 from ledsim.loop.build.estimation import loop_estimator, run_noise
+from ledsim.loop.build.head_kkl import head_kkl
 from ledsim.loop.run_config import RunConfig
+from ledsim.physics.axis_model import AxisRatioModel
 from ledsim.physics.gimbal_system import GimbalSystem
+from ledsim.physics.head_model import HeadModel
+from ledsim.physics.head_system import HeadSystem
 from ledsim.radiometry.optics import nominal_noise_std, peak_power
 from observer.baselines.oracle import Oracle
 from observer.noise import MeasurementNoise
@@ -79,9 +85,64 @@ def control_step(cfg: RunConfig, system: GimbalSystem, model, seed: int, q_hold:
                        system.constants, motor, spec.warmup, model=model)
 
 
+def head_model(cfg: RunConfig, model: HeadModel) -> HeadModel:
+    """The head's ``model`` told the run's calibration (its channels' gains)."""
+    gains = cfg.world.channel_gains()
+    return model if gains is None else model.calibrated(gains)
+
+
+def head_estimator(cfg: RunConfig, system: HeadSystem, model: HeadModel,
+                   noise: MeasurementNoise | None = None):
+    """The estimator (not the oracle) of a pan-tilt run of ``cfg`` on the head's
+    ``model`` (told the calibration, :func:`head_model`): the shipped KKL of each axis,
+    or a filter in four states, told the run's noise scale."""
+    est = head_kkl(model) if cfg.estimator == "kkl" else \
+        build_estimator(cfg.estimator, model, particles=cfg.particles)
+    scale = (run_noise(cfg, system) if noise is None else noise).scale
+    if scale != 1.0:
+        est.tell_noise_scale(scale)
+    return est
+
+
+def head_control_step(cfg: RunConfig, system: HeadSystem, model: HeadModel, seed: int,
+                      truth: Callable[[], np.ndarray], record: bool = False,
+                      noise: MeasurementNoise | None = None) -> ControlStep:
+    """The control step of seed ``seed`` of a pan-tilt run of ``cfg``: the dropout gate,
+    the estimator in four states on the head's ``model`` (the oracle reads ``truth``),
+    with the minimum-time slew on both hinges at the start when the run acquires so, the
+    scenario's law on both axes, and the motors holding the encoders' pointing during
+    a warm-up; supervised (:class:`~ledsim.agent.head_supervisor.HeadSupervisor`: a
+    fix from the quad, the minimum-time slew to it, loss detection and reacquisition)
+    when the run is and its law tracks the beam."""
+    spec = cfg.scenario_spec
+    limit = system.config.torque_limit
+    model = head_model(cfg, model)
+    if cfg.estimator == "oracle":
+        est = Oracle(system, truth)
+    else:
+        est = head_estimator(cfg, system, model, noise)
+        if record:
+            est = RecordingEstimator(est)
+        est.seed_run(seed)
+        est.reset()
+    slew = TimeOptimalSlew(model.inertia, limit, system.Te)
+    if cfg.supervision and spec.law.tracks_beam:
+        ref = system.constants.layout.reference
+        supervisor = HeadSupervisor(est, [AxisRatioModel(model, a) for a in range(2)], slew,
+                                    float(model.h(np.zeros(4))[ref]), ref, system.Te)
+    elif cfg.fast_acquisition:  # the oracle's slew: its estimate is the truth
+        supervisor = Unsupervised(est, slew, 0.0)
+    else:
+        supervisor = Unsupervised(est)
+    motor = GimbalMotor(model.inertia, system.home.copy(), limit=limit)
+    return ControlStep(dropout_gate(system.constants, supervisor), supervisor, spec.law,
+                       system.constants, motor, spec.warmup)
+
+
 def dropout_gate(constants, supervisor) -> DropoutGate:
     """The gate in front of ``supervisor``. Past max_hold it passes a lasting darkness
     on, for a link supervisor to see as a blackout; an estimator alone cannot read
     darkness, so without supervision the gate holds every dark sample."""
-    hold = {} if isinstance(supervisor, LinkSupervisor) else {"max_hold": math.inf}
+    hold = {} if isinstance(supervisor, LinkSupervisor | HeadSupervisor) else \
+        {"max_hold": math.inf}
     return DropoutGate(constants, **hold)

@@ -100,10 +100,13 @@ _MODELS: dict = {}
 
 
 def identified_model(system: GimbalSystem) -> IdentifiedGimbalModel:
-    """The fitted one-step model of this world (cached per process and world)."""
+    """The fitted one-step model of this world (cached per process and world); of a
+    pan-tilt head's (:class:`~ledsim.physics.head_system.HeadSystem`), its four-state
+    :class:`~ledsim.physics.head_model.HeadModel`."""
     key = json.dumps(system.metadata(), sort_keys=True)
     if key not in _MODELS:
-        _MODELS[key] = IdentifiedGimbalModel.fit(system)
+        _MODELS[key] = system.model() if hasattr(system, "home") else \
+            IdentifiedGimbalModel.fit(system)
     return _MODELS[key]
 
 

@@ -5,6 +5,8 @@ from __future__ import annotations
 
 from typing import NamedTuple
 
+import numpy as np
+
 from ledsim.agent.autopilot import Vehicle
 from ledsim.loop.build.estimation import run_noise
 from ledsim.loop.run_config import RunConfig
@@ -35,9 +37,17 @@ def start_world(cfg: RunConfig, system: GimbalSystem, world: LinkWorld, seed: in
     with ``seed``."""
     x0 = cfg.scenario_spec.x0 if x0 is None else x0
     phi0, phidot0 = x0  # the one axis's angle and rate
-    world.reset(gimbal_angle=system.phi_home - phi0, gimbal_rate=0.0 - phidot0)
+    if world.config.constants.layout.n_axes == 2:
+        # A pan-tilt head: the azimuth starts where the one axis would, the tilt
+        # ``initial_elevation`` off the LED's elevation (the scene's, as the vehicle's
+        # navigation would put it).
+        world.reset(gimbal_angle=system.home - np.array([phi0, cfg.initial_elevation]),
+                    gimbal_rate=-np.array([phidot0, 0.0]))
+    else:
+        world.reset(gimbal_angle=system.phi_home - phi0, gimbal_rate=0.0 - phidot0)
     sensor = IrradianceSensor(world, seed=seed, measurement_noise=(
-        run_noise(cfg, system) if noise is None else noise))
+        run_noise(cfg, system) if noise is None else noise),
+        channel_gains=cfg.world.channel_gains())
     disturbances = [parse_disturbance(d) for d in cfg.disturbances]
     for d in disturbances:
         d.reset(seed)

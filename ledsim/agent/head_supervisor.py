@@ -1,0 +1,188 @@
+"""The link supervisor of a pan-tilt head: acquisition, loss detection, occlusion carry
+and reacquisition on both axes (what :class:`~ledsim.agent.supervisor.LinkSupervisor`
+is for the paper's pair on one axis).
+
+The quad fixes the beam in one sample: each axis's pair over the data detector gives
+that axis's angle (:meth:`~ledsim.physics.axis_model.AxisRatioModel.fix`), whatever the
+gain. So every acquisition is a fix, a minimum-time slew to it on both hinges, and the
+estimator restarted there. The encoder angles at which the head last saw the LED
+(:attr:`HeadSupervisor.target`: an angle is the encoder's way to go, x = home - q) carry
+the estimate while the link is lost.
+
+==============  =============================================================
+mode            what the head does
+==============  =============================================================
+``acquiring``   slews to the fix (renewed each step the beam is seen), then
+                restarts the estimator there and tracks
+``tracking``    the estimator drives the law; a data detector dark for
+                ``loss_time`` declares the link lost (the dropout gate's missing
+                samples count as dark)
+``lost``        carries the estimate on the encoder, slews back to where the LED was
+                (a kick, a hull strike) and waits there ``patience`` (an occluder);
+                then spirals around it (:class:`~ledsim.agent.spiral.SpiralScan`);
+                the beam seen again is a fix and an acquisition
+==============  =============================================================
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+
+from ledsim.agent.axes import angles_rates, magnitude
+from ledsim.agent.spiral import SpiralScan
+from ledsim.agent.step import Decision
+
+
+class HeadSupervisor:
+    """The :mod:`supervisor <ledsim.agent.head_supervisor>` of a pan-tilt head.
+
+    Args:
+        estimator: the estimator in four states (angles, then rates).
+        axes: each axis's :class:`~ledsim.physics.axis_model.AxisRatioModel` (the fix).
+        slew: the minimum-time slew of both hinges
+            (:class:`~ledsim.agent.slew.TimeOptimalSlew`).
+        peak: the data detector's power on the boresight [W] (the model's).
+        reference: the data detector's index among the powers.
+        Te: the control period [s].
+        seen_level, dark_level: the data detector's share of ``peak`` at which the beam
+            counts as seen (a fix is taken) and as gone [-].
+        loss_time: how long the data detector stays dark before the link is lost [s].
+        patience: how long a lost head waits where the LED was before it scans [s].
+        arrive_tol, arrive_rate: an acquisition arrives within this angle [rad] of the
+            fix on each axis, turning slower than this [rad/s].
+        reslew: a tracked estimate this far off the boresight [rad] is slewed to.
+    """
+
+    def __init__(self, estimator, axes, slew, peak: float, reference: int, Te: float,
+                 seen_level: float = 0.2, dark_level: float = 0.05,
+                 loss_time: float = 0.05, patience: float = 0.5,
+                 arrive_tol: float = 0.005, arrive_rate: float = 0.3, reslew: float = 0.1):
+        self.estimator, self.axes, self.slew = estimator, list(axes), slew
+        self.peak, self.reference, self.Te = float(peak), int(reference), Te
+        self.seen = seen_level * self.peak
+        self.dark = dark_level * self.peak
+        self.loss_steps = max(1, int(round(loss_time / Te)))
+        self.patience_steps = int(round(patience / Te))
+        self.arrive_tol, self.arrive_rate, self.reslew = arrive_tol, arrive_rate, reslew
+        self.spiral = SpiralScan(Te)
+        self.mode = "acquiring"
+        self.target: np.ndarray | None = None  # encoder angles where the LED was seen
+        self._dark_steps = 0
+        self._waited = 0
+        self._std: np.ndarray | None = None
+        self._updated = False  # the estimator was updated this step
+        self._fixed = False  # the last step's target is a fix
+        self._turn: np.ndarray | None = None  # d(target)/dt from successive fixes [rad/s]
+
+    #: The powers reach the estimator as they are (the quad's ratios need no gain).
+    gain_ratio = 1.0
+
+    @property
+    def outside_domain(self) -> bool:
+        return self.estimator.outside_domain
+
+    # -- what the powers say ---------------------------------------------------------
+
+    def _fix(self, y: np.ndarray) -> np.ndarray | None:
+        """Both angles [rad] from the powers, when the data detector sees the beam."""
+        p0 = y[self.reference]
+        if not (math.isfinite(p0) and p0 >= self.seen):
+            return None
+        angles = [a.fix(y) for a in self.axes]
+        return None if any(v is None for v in angles) else np.array(angles)
+
+    def _is_dark(self, y: np.ndarray) -> bool:
+        p0 = y[self.reference]
+        return not math.isfinite(p0) or p0 < self.dark
+
+    def _carried(self, q: np.ndarray, qdot: np.ndarray) -> np.ndarray:
+        """The estimate carried on the encoder: the LED where it was last seen."""
+        return np.r_[self.target - q, -qdot]
+
+    # -- the step ----------------------------------------------------------------------
+
+    def step(self, t: float, y: np.ndarray, q, qdot) -> Decision:
+        fixed, self._fixed, self._updated = self._fixed, False, False
+        y = np.asarray(y, dtype=float)
+        q, qdot = np.asarray(q, dtype=float), np.asarray(qdot, dtype=float)
+        if self.mode == "tracking":
+            return self._track(y, q, qdot)
+        fix = self._fix(y)
+        if fix is not None:
+            target = q + fix
+            if fixed:  # the line of sight's turn in the encoder's terms, smoothed
+                rate = (target - self.target) / self.Te
+                self._turn = rate if self._turn is None else 0.5 * (self._turn + rate)
+            self.target, self._fixed = target, True
+            self.spiral.stop()
+            if self.mode == "lost" and magnitude(fix) <= self.reslew:
+                return self._restart(fix, y, qdot, "reacquired")
+            self.mode = "acquiring"
+            if magnitude(fix) < self.arrive_tol and magnitude(qdot) < self.arrive_rate:
+                return self._restart(fix, y, qdot, "acquired")
+            # The beam is in view: the fix is the estimate, and the link stands.
+            return Decision(np.r_[fix, -qdot], False, True,
+                            self.slew.command(q, qdot, self.target), reason="acquiring")
+        xhat = self._update(y)
+        if self.target is None:  # nothing seen yet: scan around where the head looks
+            if not self.spiral.active:
+                self.spiral.start(q)
+            self.mode = "lost"
+            return Decision(xhat, True, True, self.spiral.command(q, qdot),
+                            reason="searching")
+        self.mode = "lost"
+        held = self._carried(q, qdot)
+        if self.spiral.active:
+            return Decision(xhat, True, True, self.spiral.command(q, qdot),
+                            reason="scanning", held=held, held_std=self._std)
+        if magnitude(self.target - q) > self.arrive_tol or magnitude(qdot) > self.arrive_rate:
+            self._waited = 0  # back to where the LED was first
+        else:
+            self._waited += 1
+            if self._waited > self.patience_steps:
+                self.spiral.start(self.target)
+        return Decision(xhat, True, True, self.slew.command(q, qdot, self.target),
+                        reason="waiting", held=held, held_std=self._std)
+
+    def _update(self, y: np.ndarray) -> np.ndarray:
+        self._updated = True
+        return self.estimator.update(y)
+
+    def _track(self, y: np.ndarray, q: np.ndarray, qdot: np.ndarray) -> Decision:
+        xhat = self._update(y)
+        angles, _ = angles_rates(xhat)
+        if not self._is_dark(y):
+            self._dark_steps = 0
+            self.target = q + angles
+            self._std = getattr(self.estimator, "std", None)
+            fix = self._fix(y)
+            # Far off the boresight (a kick), or far from what the powers say (an
+            # estimate left behind): the fix takes over, and the slew.
+            if fix is not None and (magnitude(angles) > self.reslew
+                                    or magnitude(fix - angles) > self.reslew):
+                self.mode = "acquiring"
+                return self.step(0.0, y, q, qdot)
+            return Decision(xhat, False)
+        self._dark_steps += 1
+        if self._dark_steps < self.loss_steps:
+            return Decision(xhat, False)
+        self.mode, self._waited = "lost", 0
+        return Decision(xhat, True, True, self.slew.command(q, qdot, self.target),
+                        reason="dark", held=self._carried(q, qdot), held_std=self._std)
+
+    def _restart(self, fix: np.ndarray, y: np.ndarray, qdot: np.ndarray,
+                 reason: str) -> Decision:
+        """Restart the estimator at the fix, its rates the line of sight's turn (seen
+        over the last fixes) less the encoder's, and track."""
+        turn = 0.0 if self._turn is None else self._turn
+        self.estimator.reset(np.r_[fix, turn - qdot])
+        self.mode, self._dark_steps, self._turn = "tracking", 0, None
+        return Decision(self._update(y), False, reseeded=True, reason=reason)
+
+    def predict(self, u) -> None:
+        """The estimator's predict, after a step that updated it (while the slew or
+        the scan has the motor from a fix, the estimator waits)."""
+        if self._updated:
+            self.estimator.predict(u)
