@@ -9,8 +9,9 @@ For ``--link`` (default luma, in its preset water) at 0.5 of its range at the FE
 defaults (link supervision, station keeping; the yaw gimbal with the vehicle's IMU, the
 pan-tilt without it), for the KKL, the EKF, the particle filter and the oracle:
 
-- the LED 0, 10, 20, 30 and 80 deg below the receiver (a node on the seabed), and level
-  at 0.9 of the range;
+- the LED 0, 10, 20, 30 and 80 deg below the receiver, its axis aimed at it (a node on
+  the seabed that faces the vehicle: ``--transmitter-aimed``), and level at 0.9 of the
+  range;
 - head, beam and following seas (headings pi, pi/2, 0) of 0.5 and 1.5 m at 6 s, the
   receiver at 3 and 10 m (strip theory);
 - the hull kicked at 3 rad/s in yaw, pitch and roll;
@@ -106,7 +107,7 @@ def jobs_of(args) -> list:
         if led is not None:
             tx = round(depth + d * math.sin(math.radians(float(led.split(":")[1]))), 2)
         kw = dict(link=args.link, distance=d, depth=depth, transmitter_depth=tx,
-                  disturbances=dist, seconds=args.seconds)
+                  transmitter_aimed=tx is not None, disturbances=dist, seconds=args.seconds)
         for head in HEADS:
             extra = {"channel_mismatch": 0.05} if label == MISMATCH and head != "yaw" \
                 else {}

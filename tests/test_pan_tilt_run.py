@@ -109,3 +109,33 @@ def test_a_pan_tilt_run_with_the_ekf_gives_each_axis_and_the_pointing(tmp_path):
     assert steady["pointing"] >= max(steady["azimuth"], steady["elevation"])
     assert res["rmse_x1"] == res["rmse_azimuth"]
     assert res["availability"]["mean"] >= 0.99
+
+
+def test_an_aimed_led_faces_the_receiver_above_or_below_it():
+    import math
+
+    from ledsim.loop.world_part import WorldPart
+
+    for tx in (5.0, 35.0):
+        part = WorldPart(link="luma", distance=30.0, depth=20.0, transmitter_depth=tx,
+                         transmitter_aimed=True)
+        world = LinkWorld(part.world_config())
+        r = IrradianceSensor(world, noise=False).read(noise=False)
+        assert np.all(r.emission_angle < 0.01), r.emission_angle  # level: 0.52 rad off
+        level = LinkWorld(replace(part, transmitter_aimed=False).world_config())
+        r = IrradianceSensor(level, noise=False).read(noise=False)
+        assert np.all(np.abs(r.emission_angle - math.asin(0.5)) < 0.01)
+
+
+def test_near_the_pole_the_pan_swings_by_the_secant_and_the_head_still_points():
+    """The LED 80 deg below, aimed up: the pan turns the azimuth by cos(80 deg) of its
+    own turn, the agent divides by it (``physics/head.py:pan_gain``), and the oracle's
+    head keeps the link (1.000 measured; without the secant 0.26-0.48)."""
+    import math
+
+    d = 31.25
+    spec = RunSpec(link="luma", distance=d, depth=20.0, gimbal="pan-tilt",
+                   transmitter_depth=round(20.0 + d * math.sin(math.radians(80)), 2),
+                   transmitter_aimed=True, estimator="oracle", seconds=3.0)
+    m = run_batch(spec, [0])[0].metrics
+    assert m.availability >= 0.99 and m.pointing_loss_db <= 0.05, m

@@ -31,6 +31,7 @@ import math
 import numpy as np
 
 from ledsim.agent.axes import angles_rates, magnitude
+from ledsim.agent.pan_tilt import pan_gain, to_encoder, to_head
 from ledsim.agent.spiral import SpiralScan
 from ledsim.agent.step import Decision
 
@@ -73,6 +74,7 @@ class HeadSupervisor:
         self._waited = 0
         self._std: np.ndarray | None = None
         self._updated = False  # the estimator was updated this step
+        self._q = np.zeros(2)  # the step's encoder angles
         self._fixed = False  # the last step's target is a fix
         self._turn: np.ndarray | None = None  # d(target)/dt from successive fixes [rad/s]
 
@@ -99,7 +101,21 @@ class HeadSupervisor:
 
     def _carried(self, q: np.ndarray, qdot: np.ndarray) -> np.ndarray:
         """The estimate carried on the encoder: the LED where it was last seen."""
-        return np.r_[self.target - q, -qdot]
+        return np.r_[to_head(self.target - q, q), -to_head(qdot, q)]
+
+    @staticmethod
+    def _head_input(u: np.ndarray, q: np.ndarray) -> np.ndarray:
+        """An input the slew or the scan gives per hinge, in the head's frame (the
+        motor divides the pan's by its gain again: ``agent/pan_tilt.py``)."""
+        u = np.array(u, dtype=float)
+        u[0] *= pan_gain(q[1])
+        return u
+
+    def _slew(self, q: np.ndarray, qdot: np.ndarray) -> np.ndarray:
+        return self._head_input(self.slew.command(q, qdot, self.target), q)
+
+    def _scan(self, q: np.ndarray, qdot: np.ndarray) -> np.ndarray:
+        return self._head_input(self.spiral.command(q, qdot), q)
 
     # -- the step ----------------------------------------------------------------------
 
@@ -107,11 +123,12 @@ class HeadSupervisor:
         fixed, self._fixed, self._updated = self._fixed, False, False
         y = np.asarray(y, dtype=float)
         q, qdot = np.asarray(q, dtype=float), np.asarray(qdot, dtype=float)
+        self._q = q
         if self.mode == "tracking":
             return self._track(y, q, qdot)
         fix = self._fix(y)
         if fix is not None:
-            target = q + fix
+            target = q + to_encoder(fix, q)
             if fixed:  # the line of sight's turn in the encoder's terms, smoothed
                 rate = (target - self.target) / self.Te
                 self._turn = rate if self._turn is None else 0.5 * (self._turn + rate)
@@ -123,28 +140,27 @@ class HeadSupervisor:
             if magnitude(fix) < self.arrive_tol and magnitude(qdot) < self.arrive_rate:
                 return self._restart(fix, y, qdot, "acquired")
             # The beam is in view: the fix is the estimate, and the link stands.
-            return Decision(np.r_[fix, -qdot], False, True,
-                            self.slew.command(q, qdot, self.target), reason="acquiring")
+            return Decision(np.r_[fix, -to_head(qdot, q)], False, True, self._slew(q, qdot),
+                            reason="acquiring")
         xhat = self._update(y)
         if self.target is None:  # nothing seen yet: scan around where the head looks
             if not self.spiral.active:
                 self.spiral.start(q)
             self.mode = "lost"
-            return Decision(xhat, True, True, self.spiral.command(q, qdot),
-                            reason="searching")
+            return Decision(xhat, True, True, self._scan(q, qdot), reason="searching")
         self.mode = "lost"
         held = self._carried(q, qdot)
         if self.spiral.active:
-            return Decision(xhat, True, True, self.spiral.command(q, qdot),
-                            reason="scanning", held=held, held_std=self._std)
+            return Decision(xhat, True, True, self._scan(q, qdot), reason="scanning",
+                            held=held, held_std=self._std)
         if magnitude(self.target - q) > self.arrive_tol or magnitude(qdot) > self.arrive_rate:
             self._waited = 0  # back to where the LED was first
         else:
             self._waited += 1
             if self._waited > self.patience_steps:
                 self.spiral.start(self.target)
-        return Decision(xhat, True, True, self.slew.command(q, qdot, self.target),
-                        reason="waiting", held=held, held_std=self._std)
+        return Decision(xhat, True, True, self._slew(q, qdot), reason="waiting", held=held,
+                        held_std=self._std)
 
     def _update(self, y: np.ndarray) -> np.ndarray:
         self._updated = True
@@ -155,7 +171,7 @@ class HeadSupervisor:
         angles, _ = angles_rates(xhat)
         if not self._is_dark(y):
             self._dark_steps = 0
-            self.target = q + angles
+            self.target = q + to_encoder(angles, q)
             self._std = getattr(self.estimator, "std", None)
             fix = self._fix(y)
             # Far off the boresight (a kick), or far from what the powers say (an
@@ -169,15 +185,15 @@ class HeadSupervisor:
         if self._dark_steps < self.loss_steps:
             return Decision(xhat, False)
         self.mode, self._waited = "lost", 0
-        return Decision(xhat, True, True, self.slew.command(q, qdot, self.target),
-                        reason="dark", held=self._carried(q, qdot), held_std=self._std)
+        return Decision(xhat, True, True, self._slew(q, qdot), reason="dark",
+                        held=self._carried(q, qdot), held_std=self._std)
 
     def _restart(self, fix: np.ndarray, y: np.ndarray, qdot: np.ndarray,
                  reason: str) -> Decision:
         """Restart the estimator at the fix, its rates the line of sight's turn (seen
         over the last fixes) less the encoder's, and track."""
         turn = 0.0 if self._turn is None else self._turn
-        self.estimator.reset(np.r_[fix, turn - qdot])
+        self.estimator.reset(np.r_[fix, to_head(turn - qdot, self._q)])
         self.mode, self._dark_steps, self._turn = "tracking", 0, None
         return Decision(self._update(y), False, reseeded=True, reason=reason)
 

@@ -38,6 +38,7 @@ def _loop_config(args, **given):
 def simulate(args) -> int:
     from ledsim.constants import LinkConstants
     from ledsim.experiment.plotting import plot_series
+    from ledsim.loop.world_part import aimed_pitch
     from ledsim.physics.disturbances import check_sea, check_timing, parse_disturbance
     from ledsim.physics.scene import WorldConfig
     from ledsim.physics.sensor import IrradianceSensor
@@ -63,6 +64,9 @@ def simulate(args) -> int:
                                   led_yaw=math.radians(args.led_yaw),
                                   led_lateral_offset=args.led_offset, depth=args.depth,
                                   transmitter_depth=args.transmitter_depth,
+                                  led_pitch=aimed_pitch(args.depth, args.transmitter_depth,
+                                                        args.distance)
+                                  if args.transmitter_aimed else 0.0,
                                   receiver_dome=args.receiver_dome,
                                   sea_depth=args.sea_depth, **extra))
     world.reset(gimbal_angle=args.gimbal_angle)

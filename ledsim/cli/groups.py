@@ -24,7 +24,8 @@ def add_link_args(p, sea: bool = True) -> None:
     ``sea``, the vehicles' depths)."""
     add_spec_flags(p, "link", "water", "attenuation", "bit_rate")
     if sea:
-        add_spec_flags(p, "depth", "transmitter_depth", "sea_depth", "receiver_dome")
+        add_spec_flags(p, "depth", "transmitter_depth", "sea_depth", "receiver_dome",
+                       "transmitter_aimed")
 
 
 def resolved_distance(args) -> float:

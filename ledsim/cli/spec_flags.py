@@ -120,6 +120,9 @@ def flags() -> dict[str, Flag]:
                                  "pointing photodiodes [-] (each pair reads 1 +- M/2 of "
                                  "its light; the estimators are told it, as calibrated)",
                                  number(0.0, 0.5, "-"), metavar="M"),
+        "transmitter_aimed": Flag("the LED's axis points at the receiver (a node that "
+                                  "faces the vehicle above or below it; default: level)",
+                                  form="on"),
         "scene": Flag("MJCF scene file (default: the shipped led_link.xml)"),
         "integrator": Flag("MuJoCo integrator (docs/physics.md compares them)",
                            choices=INTEGRATORS),

@@ -121,7 +121,7 @@ class LinkAlignEnv(gym.Env, EzPickle):
         disturbances = spec.pop("disturbances", ())
         spec["disturbances"] = (disturbances,) if isinstance(disturbances, str) \
             else tuple(disturbances)
-        for flag in ("imu", "station_keeping", "receiver_dome"):
+        for flag in ("imu", "station_keeping", "receiver_dome", "transmitter_aimed"):
             if flag in spec:
                 spec[flag] = bool(spec[flag])
         fixed = preset_named(spec.get("link", WorldPart.link)).ships_fixed_kkls

@@ -72,7 +72,8 @@ def split_disturbance(cell: str) -> tuple[str, ...]:
 _LINK_DEFAULTS = {"link": "paper", "water": None, "attenuation": None, "bit_rate": None,
                   "depth": DEFAULT_DEPTH, "transmitter_depth": None,
                   "receiver_dome": False, "sea_depth": None, "gimbal": None,
-                  "receiver": None, "initial_elevation": 0.0, "channel_mismatch": 0.0}
+                  "receiver": None, "initial_elevation": 0.0, "channel_mismatch": 0.0,
+                  "transmitter_aimed": False}
 
 
 @dataclass(frozen=True)

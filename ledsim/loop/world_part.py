@@ -3,6 +3,7 @@ the water, the depths, the receiver's head, the scene)."""
 
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass, replace
 
 from ledsim.agent.autopilot import StationKeeping
@@ -52,6 +53,8 @@ class WorldPart:
             photodiodes [-]: each pair's first reads 1 + m/2 of its light, its second
             1 - m/2 (a head's channels differ); the estimators are told it, as the
             head's calibration measured it (0: matched channels).
+        transmitter_aimed: the LED's axis points at the receiver (a node that faces the
+            vehicle above or below it); off: level, whatever the depths.
     """
 
     distance: float | None = None
@@ -73,6 +76,7 @@ class WorldPart:
     gimbal: str | None = None
     receiver: str | None = None
     channel_mismatch: float = 0.0
+    transmitter_aimed: bool = False
 
     def __post_init__(self) -> None:
         if self.distance is None:  # the link preset's (0.085 m on the paper's bench)
@@ -112,8 +116,18 @@ class WorldPart:
         constants = link_constants(self.link, d, self.water, self.attenuation)
         if self.two_axes:
             constants = replace(constants, receiver_layout=quad_layout(constants.dphi))
+        if self.transmitter_aimed:
+            extra["led_pitch"] = aimed_pitch(self.depth, self.transmitter_depth, d)
         return WorldConfig(constants=constants,
                            torque_limit=self.torque_limit, integrator=self.integrator,
                            depth=self.depth, transmitter_depth=self.transmitter_depth,
                            receiver_dome=self.receiver_dome, sea_depth=self.sea_depth,
                            **extra)
+
+
+def aimed_pitch(depth: float, transmitter_depth: float | None, distance: float) -> float:
+    """How far up [rad] an LED ``transmitter_depth`` m deep aims its axis at a receiver
+    ``depth`` m deep, ``distance`` m away (slant) (0 when level)."""
+    if transmitter_depth is None:
+        return 0.0
+    return math.asin(max(-1.0, min(1.0, (transmitter_depth - depth) / distance)))

@@ -105,3 +105,26 @@ def build_head(spec: mujoco.MjSpec, layout: ReceiverLayout, damping: float,
 def receiver_centre(sites: list) -> np.ndarray:
     """The receiver's centre in the gimbal's frame [m]: the photodiodes' midpoint."""
     return np.mean([np.asarray(site.pos) for site in sites], axis=0)
+
+
+#: The least pan gain the agent divides by [-]: within 84 deg of the pole the pan
+#: swings at most ten times the azimuth it turns.
+MIN_PAN_GAIN = 0.1
+
+
+def pan_gain(tilt: float) -> float:
+    """How much of the pan's turn the line of sight's azimuth takes at encoder tilt
+    ``tilt`` [rad] (0: the boresight level) [-]: cos(tilt), at least
+    :data:`MIN_PAN_GAIN`."""
+    return max(abs(math.cos(tilt)), MIN_PAN_GAIN)
+
+
+def to_encoder(angles, q) -> np.ndarray:
+    """The encoder offsets [rad] that turn the head by the head-frame ``angles`` [rad]
+    (azimuth, elevation), at encoder angles ``q`` [rad]."""
+    return np.array([angles[0] / pan_gain(q[1]), angles[1]])
+
+
+def to_head(offsets, q) -> np.ndarray:
+    """The head-frame angles [rad] an encoder turn of ``offsets`` [rad] gives at ``q``."""
+    return np.array([offsets[0] * pan_gain(q[1]), offsets[1]])

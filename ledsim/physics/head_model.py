@@ -213,6 +213,7 @@ class HeadModel(DiscreteSystem):
         box and a random input within +-``u_max`` [rad/s^2]; the gain from its sensor's
         noise-free powers over the box. ``home``: the encoders' angles [rad] at which
         the boresight looks at the LED (x = home - q; zero for a level LED)."""
+        from ledsim.physics.head import to_encoder
         from ledsim.physics.sensor import IrradianceSensor
 
         c = world.config.constants
@@ -238,7 +239,8 @@ class HeadModel(DiscreteSystem):
         y, g = [], []
         for pan in grid:
             for tilt in grid:
-                world.reset(gimbal_angle=home + np.array([pan, tilt]),
+                # head-frame offsets (-pan, -tilt): the pan's over its gain at home
+                world.reset(gimbal_angle=home + to_encoder((pan, tilt), home),
                             gimbal_rate=np.zeros(2))
                 y.append(sensor.read(noise=False).power_clean)
                 g.append(head_power(1.0, -pan, -tilt, c))

@@ -22,6 +22,7 @@ from __future__ import annotations
 
 import numpy as np
 
+from ledsim.physics.head import to_encoder
 from ledsim.physics.head_model import HeadModel
 from ledsim.physics.sensor import IrradianceSensor
 from ledsim.physics.world import LinkWorld, WorldConfig
@@ -59,13 +60,14 @@ class HeadSystem(DiscreteSystem):
         self.phi_home = self.home
         self.world.reset(gimbal_angle=self.home, gimbal_rate=np.zeros(2))
 
-    def _pointing(self, iterations: int = 6) -> np.ndarray:
+    def _pointing(self, iterations: int = 8) -> np.ndarray:
         """The encoders' angles [rad] at which the data detector looks at the LED: x is
-        home - q to first order, so each pass adds the angles it still reads."""
+        home - q to first order (the pan's share over its gain, ``head.to_encoder``), so
+        each pass adds the angles it still reads."""
         q = np.zeros(2)
         for _ in range(iterations):
             self.world.reset(gimbal_angle=q, gimbal_rate=np.zeros(2))
-            q = q + self.sensor.read(noise=False).x[:2]
+            q = q + to_encoder(self.sensor.read(noise=False).x[:2], q)
         return q
 
     def torque_for(self, u) -> np.ndarray:
@@ -74,7 +76,9 @@ class HeadSystem(DiscreteSystem):
         return -self.inertia * np.asarray(u, dtype=float)
 
     def _set_state(self, x) -> None:
-        self.world.reset(gimbal_angle=self.home - x[:2], gimbal_rate=-np.asarray(x[2:]))
+        """The head at the state ``x`` (head-frame angles and rates) from its home."""
+        self.world.reset(gimbal_angle=self.home - to_encoder(x[:2], self.home),
+                         gimbal_rate=-to_encoder(x[2:], self.home))
 
     def f(self, x, u=0.0):
         x = np.asarray(x, dtype=float)

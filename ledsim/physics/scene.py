@@ -52,6 +52,8 @@ class WorldConfig:
         led_lateral_offset: LED displacement across the link (world y) [m].
         led_yaw: rotation of the LED axis about world z away from the receiver [rad];
             sets the emission angle theta.
+        led_pitch: rotation of the LED axis up from level [rad] (after ``led_yaw``): a
+            node on the seabed that faces a vehicle above it.
         hull_mass: AUV hull mass [kg]; None = neutrally buoyant (mass of displaced water).
         water_density: fluid density [kg/m^3] (0: in air, no fluid forces).
         water_viscosity: dynamic viscosity [Pa s].
@@ -84,6 +86,7 @@ class WorldConfig:
     xml: Path = field(default_factory=scene_path)
     led_lateral_offset: float = 0.0
     led_yaw: float = 0.0
+    led_pitch: float = 0.0
     hull_mass: float | None = None
     water_density: float = 1000.0
     water_viscosity: float = 0.00089
@@ -137,9 +140,17 @@ class WorldConfig:
         return round(self.constants.Te / self.timestep)
 
 
-def _set_yaw(element, angle: float) -> None:
+def _set_yaw(element, angle: float, pitch: float = 0.0) -> None:
+    """Turn the LED's body by ``angle`` about world z, then its axis (the body's -x)
+    up by ``pitch`` [rad] (about its y)."""
     element.alt.type = mujoco.mjtOrientation.mjORIENTATION_QUAT
-    element.quat = [math.cos(angle / 2), 0.0, 0.0, math.sin(angle / 2)]
+    if pitch == 0.0:
+        element.quat = [math.cos(angle / 2), 0.0, 0.0, math.sin(angle / 2)]
+        return
+    cy, sy = math.cos(angle / 2), math.sin(angle / 2)
+    # -x turned up by pitch is a turn of pitch about y: q_z(angle) q_y(pitch)
+    cp, sp = math.cos(pitch / 2), math.sin(pitch / 2)
+    element.quat = [cy * cp, -sy * sp, cy * sp, sy * cp]
 
 
 def transmitter_rise(depth: float, transmitter_depth: float | None, distance: float,
@@ -199,7 +210,7 @@ def build_spec(config: WorldConfig) -> mujoco.MjSpec:
     if c.link is not None:  # metres of water: a docking station, fog, a wider view
         apply_sea(spec, c.link.water_at_led.attenuation, centre, np.asarray(tx.pos),
                   config.depth)
-    _set_yaw(tx, config.led_yaw)
+    _set_yaw(tx, config.led_yaw, config.led_pitch)
 
     for axis in layout.axes:
         hinge = spec.joint(axis.joint)

@@ -13,6 +13,7 @@ import numpy as np
 from ledsim.agent.gate import DropoutGate
 from ledsim.agent.head_supervisor import HeadSupervisor
 from ledsim.agent.laws import intensity_maximum
+from ledsim.agent.pan_tilt import HeadControlStep, HeadMotor
 from ledsim.agent.slew import TimeOptimalSlew
 from ledsim.agent.step import ControlStep, GimbalMotor, Unsupervised
 from ledsim.agent.supervisor import LinkSupervisor
@@ -134,9 +135,9 @@ def head_control_step(cfg: RunConfig, system: HeadSystem, model: HeadModel, seed
         supervisor = Unsupervised(est, slew, 0.0)
     else:
         supervisor = Unsupervised(est)
-    motor = GimbalMotor(model.inertia, system.home.copy(), limit=limit)
-    return ControlStep(dropout_gate(system.constants, supervisor), supervisor, spec.law,
-                       system.constants, motor, spec.warmup)
+    motor = HeadMotor(model.inertia, system.home.copy(), limit=limit)
+    return HeadControlStep(dropout_gate(system.constants, supervisor), supervisor, spec.law,
+                           system.constants, motor, spec.warmup)
 
 
 def dropout_gate(constants, supervisor) -> DropoutGate:
