@@ -3,6 +3,7 @@ pointing photodiodes over the data detector (``physics/axis_model.py``), into
 assets/checkpoints/kkl_pan_tilt_<axis>.safetensors.
 
     python scripts/train_pan_tilt.py [--samples 200000] [--hidden 500] [--seed 0]
+    python scripts/train_pan_tilt.py --lens-field-deg 10   # the lensed receiver's pair
 
 Each axis is the paper's system with ratios for powers: its f the head's dynamics fitted
 to MuJoCo transitions of the quad's world (``luma`` at its 30 m, a level LED), its h the
@@ -34,14 +35,17 @@ def main() -> int:
     ap.add_argument("--samples", type=int, default=200_000)
     ap.add_argument("--hidden", type=int, default=500, help="tanh units of T and T*")
     ap.add_argument("--seed", type=int, default=0)
+    ap.add_argument("--lens-field-deg", type=float, default=None,
+                    help="the pair of a lensed receiver of this half-power field [deg]")
     args = ap.parse_args()
     for axis, name in enumerate(AXES):
-        system = reference_axes()[axis]
+        system = reference_axes(args.lens_field_deg)[axis]
         design, config = observer_preset("default", system.Te)
         config = replace(config, n_samples=args.samples, hidden=args.hidden, seed=args.seed)
         kkl, report = train_kkl(system, design, config, progress=True)
-        path = save_checkpoint(kkl, shipped_axis(name), extra={
-            "pan_tilt_axis": name, "samples": args.samples, "hidden": args.hidden})
+        path = save_checkpoint(kkl, shipped_axis(name, args.lens_field_deg), extra={
+            "pan_tilt_axis": name, "samples": args.samples, "hidden": args.hidden,
+            "lens_field_deg": args.lens_field_deg})
         print(f"{name}: training {report.seconds:.0f} s, L_dyn={report.loss_dyn:.2e}, "
               f"L_recon={report.loss_recon:.2e} -> {path}")
     return 0

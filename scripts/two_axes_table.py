@@ -6,8 +6,9 @@ with its quad, on the same physical link (issue 48).
 
 For ``--link`` (default luma, in its preset water) at 0.5 of its range at the FEC limit
 (``ledsim budget``), the receiver 20 m deep: the `align` scenario with ``ledsim run``'s
-defaults (link supervision, station keeping; the yaw gimbal with the vehicle's IMU, the
-pan-tilt without it), for the KKL, the EKF, the particle filter and the oracle:
+defaults (link supervision, station keeping, the vehicle's IMU: the yaw gimbal's
+line-of-sight feed-forward, the pan-tilt's gyro), for the KKL, the EKF, the particle
+filter and the oracle:
 
 - the LED 0, 10, 20, 30 and 80 deg below the receiver, its axis aimed at it (a node on
   the seabed that faces the vehicle: ``--transmitter-aimed``), and level at 0.9 of the
@@ -16,7 +17,9 @@ pan-tilt without it), for the KKL, the EKF, the particle filter and the oracle:
   receiver at 3 and 10 m (strip theory);
 - the hull kicked at 3 rad/s in yaw, pitch and roll;
 - the quad's opposite pointing photodiodes 5 % apart in gain (``--channel-mismatch
-  0.05``, the estimators told it as calibrated; the yaw's pair matched).
+  0.05``, the estimators told it as calibrated; the yaw's pair matched);
+- a lensed receiver (``--lens-field-deg 10``) at 0.5 and 0.9 of its own FEC range (the
+  yaw's shipped KKLs know only the bare detector: "-").
 
 Per row and head: availability on the data detector (the pair's pd1, the quad's pd0),
 its pointing loss [dB], the silent-error share, the losses declared after the first
@@ -40,6 +43,9 @@ HEADS = ("yaw", "pan-tilt")
 DEPTH = 20.0
 #: The row whose quad's opposite photodiodes differ by 5 % (the yaw's pair is matched).
 MISMATCH = "5 % mismatch between opposite photodiodes"
+#: The rows of the lensed receiver (``--lens-field-deg 10``), at its own FEC range.
+LENS = "lens, 10 deg field"
+LENS_FIELD = 10.0
 
 
 def cases(quick: bool) -> list[tuple[str, float, float | None, float, tuple[str, ...]]]:
@@ -51,6 +57,7 @@ def cases(quick: bool) -> list[tuple[str, float, float | None, float, tuple[str,
         return rows
     rows.append(("level, 0.9 of the range", DEPTH, None, 0.9, ()))
     rows.append((MISMATCH, DEPTH, None, 0.5, ()))
+    rows += [(f"{LENS}, {share} of its range", DEPTH, None, share, ()) for share in (0.5, 0.9)]
     for z in (3.0, 10.0):
         for h in (0.5, 1.5):
             for name, heading in (("head", math.pi), ("beam", math.pi / 2),
@@ -66,12 +73,19 @@ def cases(quick: bool) -> list[tuple[str, float, float | None, float, tuple[str,
 def one(job) -> dict:
     """One (case, head, estimator) over the seeds: the summary's figures."""
     os.environ.setdefault("MUJOCO_GL", "osmesa")
+    from ledsim.errors import LedsimError
     from ledsim.loop.closed_loop import run_batch
     from ledsim.loop.run_config import RunSpec
 
     label, head, est, spec_kw, seeds = job
     spec = RunSpec(**spec_kw, gimbal=head, estimator=est)
-    spec.validate()
+    try:
+        spec.validate()
+    except LedsimError:  # a run the head refuses (the yaw's KKL behind a lens): "-"
+        return {"case": label, "head": head, "estimator": est, "distance": spec.distance,
+                "transmitter_depth": spec.transmitter_depth, "availability": None,
+                "pointing_loss_db": None, "silent_error_share": None, "losses": None,
+                "false_losses": None, "pointing_rmse": None}
     outs = run_batch(spec, list(range(seeds)))
     m = [o.metrics for o in outs]
 
@@ -90,19 +104,22 @@ def one(job) -> dict:
             "pointing_rmse": mean(x.rmse_steady[pointing] for x in m)}
 
 
-def fec_range(link: str) -> float:
-    """The aligned link's range at the FEC limit [m] (``ledsim budget``)."""
+def fec_range(link: str, lens_field_deg: float | None = None) -> float:
+    """The aligned link's range at the FEC limit [m] (``ledsim budget``), with the
+    receiver's lens of that half-power field [deg] (None: bare)."""
     from ledsim.radiometry.budget import range_at_fec
     from ledsim.radiometry.link_presets import link_constants, preset_named
 
-    return range_at_fec(link_constants(link), preset_named(link).bit_rate)
+    lens = None if lens_field_deg is None else math.radians(lens_field_deg)
+    return range_at_fec(link_constants(link, lens_field=lens), preset_named(link).bit_rate)
 
 
 def jobs_of(args) -> list:
-    fec = fec_range(args.link)
+    fec, lensed = fec_range(args.link), fec_range(args.link, LENS_FIELD)
     jobs = []
     for label, depth, led, share, dist in cases(args.quick):
-        d = round(share * fec, 2)
+        lens = label.startswith(LENS)
+        d = round(share * (lensed if lens else fec), 2)
         tx = None
         if led is not None:
             tx = round(depth + d * math.sin(math.radians(float(led.split(":")[1]))), 2)
@@ -110,7 +127,7 @@ def jobs_of(args) -> list:
                   transmitter_aimed=tx is not None, disturbances=dist, seconds=args.seconds)
         for head in HEADS:
             extra = {"channel_mismatch": 0.05} if label == MISMATCH and head != "yaw" \
-                else {}
+                else {"lens_field_deg": LENS_FIELD} if lens else {}
             for est in ESTIMATORS:
                 jobs.append((label, head, est, {**kw, **extra}, args.seeds))
     return jobs
@@ -128,9 +145,12 @@ def write(rows: list[dict], args, fec: float) -> Path:
              f"{args.seeds} --seconds {args.seconds:g}`"
              + (" --quick" if args.quick else "") + ": the `align` scenario with `ledsim "
              f"run`'s defaults, the receiver {DEPTH:g} m deep (but in the seas), at 0.5 of "
-             f"the link's FEC range ({fec:.1f} m) unless the row says. The yaw gimbal runs "
-             "with the vehicle's IMU (its line-of-sight feed-forward); the pan-tilt head "
-             "without it (its estimators take the quad's powers and the torques alone). "
+             f"the link's FEC range ({fec:.1f} m; behind the {LENS_FIELD:g} deg lens "
+             f"{fec_range(args.link, LENS_FIELD):.1f} m) unless the row says. Both heads "
+             "use the "
+             "vehicle's IMU: the yaw gimbal its line-of-sight feed-forward, the pan-tilt "
+             "head its gyro (each hinge's load cancelled and told to the estimator, the "
+             "encoders in an inertial frame: `agent/pan_tilt.py`). "
              "Mean over the seeds; losses summed, false ones in brackets. Pointing RMSE: "
              "the steady window's, the pan-tilt's the angle between the estimated and "
              "the true direction, the yaw's phi.",
@@ -145,11 +165,12 @@ def write(rows: list[dict], args, fec: float) -> Path:
         for est in ESTIMATORS:
             a, b = by[(label, "yaw", est)], by[(label, "pan-tilt", est)]
             ratio = None if not oracle else b["availability"] / oracle
+            losses = "-" if a["losses"] is None else f"{a['losses']} ({a['false_losses']})"
             lines.append(
                 f"| {label} | {est} | {cell(a['availability'], '.3f')} | "
                 f"{cell(a['pointing_loss_db'], '.3f')} | "
                 f"{cell(a['silent_error_share'], '.3f')} | "
-                f"{a['losses']} ({a['false_losses']}) | {cell(b['availability'], '.3f')} | "
+                f"{losses} | {cell(b['availability'], '.3f')} | "
                 f"{cell(b['pointing_loss_db'], '.3f')} | "
                 f"{cell(b['silent_error_share'], '.3f')} | "
                 f"{b['losses']} ({b['false_losses']}) | {cell(b['pointing_rmse'], '.2e')} | "
@@ -176,7 +197,7 @@ def main() -> int:
         for k, row in enumerate(pool.map(one, jobs), 1):
             rows.append(row)
             print(f"{k}/{len(jobs)} {row['case']} {row['head']} {row['estimator']}: "
-                  f"{row['availability']:.3f}", flush=True)
+                  f"{cell(row['availability'], '.3f')}", flush=True)
     results = ROOT / "out" / "two_axes"
     results.mkdir(parents=True, exist_ok=True)
     (results / "results.json").write_text(json.dumps(rows, indent=1))

@@ -40,6 +40,8 @@ SHIPPED_DIGESTS = {
     "kkl_mujoco_scheduled_lens_d0.085": "4bd225c62e1a5d433df968289d44a53d",
     "kkl_pan_tilt_azimuth": "237c10132d588e8f4c6dcea628e6c0d7",
     "kkl_pan_tilt_elevation": "bece8300666e7185af743f7176d7904e",
+    "kkl_pan_tilt_lens10_azimuth": "c4221972bbe1f1c819fe0033f31ab44d",
+    "kkl_pan_tilt_lens10_elevation": "38ea33a01ff97f2353f5dbde30f273c9",
     "kkl_paper_d0.085": "39b2c56fde93e732ef115dab14eda1c7",
     "kkl_scheduled_d0.085": "cd7ddc5e2c5df531c2fe709de87dc85c",
     "kkl_scheduled_d0.1": "0de3fcbede77b765a218d49c0fb438ff",

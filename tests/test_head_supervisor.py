@@ -45,14 +45,14 @@ def test_acquisition_from_03_02_is_within_twice_the_minimum_time_bound(estimator
     the estimator restarted there, within twice the longer hinge's bang-bang time
     2 sqrt(angle I / limit) (0.11 s against 0.071 s measured: 1.55x)."""
     spec = replace(BASE, estimator=estimator, initial_angle=0.3, initial_elevation=0.2,
-                   seconds=1.0)
+                   seconds=2.0)
     out, seen = decisions(spec)
     system = HeadSystem(spec.world_config())
     bound = max(2 * math.sqrt(a * i / spec.torque_limit)
                 for a, i in zip((0.3, 0.2), system.inertia, strict=True))
     arrived = next(k for k, (_, d) in enumerate(seen) if d.reseeded) + 1
     assert arrived * system.Te <= 2 * bound, (arrived * system.Te, bound)
-    assert out.metrics.rmse_steady["pointing"] < 2e-3
+    assert out.metrics.rmse_steady["pointing"] < 2e-3  # over its last second
 
 
 @pytest.mark.parametrize("estimator", ["kkl", "ekf"])

@@ -57,7 +57,7 @@ class HeadSupervisor:
     """
 
     def __init__(self, estimator, axes, slew, peak: float, reference: int, Te: float,
-                 seen_level: float = 0.2, dark_level: float = 0.05,
+                 seen_level: float = 0.05, dark_level: float = 0.02,
                  loss_time: float = 0.05, patience: float = 0.5,
                  arrive_tol: float = 0.005, arrive_rate: float = 0.3, reslew: float = 0.1):
         self.estimator, self.axes, self.slew = estimator, list(axes), slew

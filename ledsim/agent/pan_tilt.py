@@ -13,10 +13,13 @@ offset is the azimuth's over the pan's gain, and the pan's input its share over 
 
 from __future__ import annotations
 
+import math
+
 import numpy as np
 
 from ledsim.agent.step import ControlStep, GimbalMotor
 from ledsim.physics.head import MIN_PAN_GAIN, pan_gain, to_encoder, to_head  # noqa: F401
+from observer.supervision.gimbal_load import LoadObserver
 
 
 class HeadMotor(GimbalMotor):
@@ -46,8 +49,59 @@ class HeadMotor(GimbalMotor):
 
 
 class HeadControlStep(ControlStep):
-    """:class:`ControlStep` of a pan-tilt head: its motor is told the tilt each step."""
+    """:class:`ControlStep` of a pan-tilt head: its motor is told the tilt each step,
+    and with the vehicle's gyro (``los``: the hull's angular rate, (3,) [rad/s] in its
+    own frame) the step stabilises the head as the one-axis step does its gimbal:
+
+    - each hinge's load (the water's torque on the head, that its model does not
+      explain) is estimated from its inertial rate, the encoder's plus the hull's about
+      that hinge, by a :class:`~observer.supervision.gimbal_load.LoadObserver` on that
+      axis's model (``axes``), cancelled by the motor and told to the estimator as part
+      of its input;
+    - the supervisor sees the encoders in an inertial frame (each plus the hull's turn
+      about its hinge since the start), so the angles it remembers still point at the
+      LED after the hull has turned.
+    """
+
+    def __init__(self, *args, axes=None, **kwargs):
+        super().__init__(*args, **kwargs)
+        limit = getattr(self.actuator, "u_limit", None)
+        self.loads = None if axes is None else [
+            LoadObserver(m, max_load=None if limit is None else float(lim))
+            for m, lim in zip(axes, np.broadcast_to(limit, (len(axes),)), strict=True)]
+        self._turned = np.zeros(2)  # the hull's turn about each hinge since the start
+        self._motor_enc = np.zeros(2)  # the encoders' u the motors gave last step
 
     def __call__(self, y, t, q=0.0, qdot=0.0, los=None):
-        self.actuator.tilt = float(q[1])
-        return super().__call__(y, t, q, qdot, los)
+        act = self.actuator
+        act.tilt = float(q[1])
+        if los is None or self.loads is None:
+            return super().__call__(y, t, q, qdot)
+        wx, wy, wz = (float(v) for v in los)
+        pan = float(q[0])
+        # the hull's rate about the pan (its z) and about the tilt (-y turned by the pan)
+        base = np.array([wz, wx * math.sin(pan) - wy * math.cos(pan)])
+        load = np.array([o.update(float(qdot[i] + base[i]), float(self._motor_enc[i]))
+                         for i, o in enumerate(self.loads)])
+        self._turned += base * self.constants.Te
+        q_in, qdot_in = q + self._turned, qdot + base
+        gain = pan_gain(act.tilt)
+        load_head = np.array([load[0] * gain, load[1]])  # in the head's frame
+        self.y_gated = self.gate(y)
+        d = self.supervisor.step(t, self.y_gated, q_in, qdot_in)
+        if d.reseeded:
+            self.law = self.law_template.start(self.constants)
+        if d.u is not None:  # the slew or the scan: the model misses fast turns, no load
+            command, load_head = d.u, np.zeros(2)
+        elif t < self.warmup:
+            command = act.hold(q_in, qdot_in)
+        else:
+            command = self.law(d.xhat, t)
+        self._holding = d.u is None and t < self.warmup
+        self._last_command = command
+        motor = act.applied(np.asarray(command, dtype=float) - load_head)
+        self._motor_enc = np.array([motor[0] / gain, motor[1]])
+        u = motor + load_head  # what the angles get: the motor's and the load's
+        self.supervisor.predict(u)
+        self.decision, self.u = d, u
+        return act.torque(motor)

@@ -57,7 +57,7 @@ def add_vehicle_args(p) -> None:
 
 def add_head_args(p) -> None:
     """The receiver's gimbal and photodiodes (run, render, sweep, demo)."""
-    add_spec_flags(p, "gimbal", "receiver", "channel_mismatch")
+    add_spec_flags(p, "gimbal", "receiver", "channel_mismatch", "lens_field_deg")
 
 
 def add_loop_args(p) -> None:

@@ -123,6 +123,10 @@ def flags() -> dict[str, Flag]:
         "transmitter_aimed": Flag("the LED's axis points at the receiver (a node that "
                                   "faces the vehicle above or below it; default: level)",
                                   form="on"),
+        "lens_field_deg": Flag("a lens in front of a physical receiver's detector: its "
+                               "half-power field [deg] (narrower than the bare 30 deg; "
+                               "the lens gathers the light of a larger aperture)",
+                               number(1.0, 29.9, "deg"), metavar="F"),
         "scene": Flag("MJCF scene file (default: the shipped led_link.xml)"),
         "integrator": Flag("MuJoCo integrator (docs/physics.md compares them)",
                            choices=INTEGRATORS),

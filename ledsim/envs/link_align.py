@@ -137,7 +137,8 @@ class LinkAlignEnv(gym.Env, EzPickle):
         if Te != world_config.constants.Te:
             c = self.cfg
             world_config = replace(world_config, constants=link_constants(
-                c.link, distance, c.water, c.attenuation, LinkConstants(Te=Te)))
+                c.link, distance, c.water, c.attenuation, LinkConstants(Te=Te),
+                c.world.lens_field))
         self.system = self._system_of(world_config)
         self.world = self.system.world
         self.model, self.data = self.world.model, self.world.data

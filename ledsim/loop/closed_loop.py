@@ -98,7 +98,12 @@ class LoopRun:
         if self.vehicle is not None:
             self.navigated[k] = self.vehicle.navigated_position
         t0 = time.perf_counter()
-        los = self.vehicle.los if self.aided else None
+        los = None
+        if self.aided:  # a pan-tilt head takes the gyro's three rates (agent/pan_tilt.py)
+            if self.axes == 1:
+                los = self.vehicle.los
+            elif (nav := self.vehicle.reading) is not None:  # none before it first acts
+                los = nav.gyro
         torque = self.step(r.power, t, q, qdot, los)
         self.spent += time.perf_counter() - t0
         d = self.step.decision

@@ -28,7 +28,8 @@ class GivenRecord:
     def take(self, k: int, step, los) -> None:
         """Step ``k`` of the :class:`~ledsim.agent.step.ControlStep` ``step`` (``los``: the
         vehicle's line of sight, None without the IMU)."""
-        self.u_hull[k] = 0.0 if los is None else los.acceleration
+        # the hull's part of u on one axis (a pan-tilt's loads are in its u already)
+        self.u_hull[k] = getattr(los, "acceleration", 0.0)
         self.reseeded[k] = step.decision.reseeded
         self.gain[k] = step.supervisor.gain_ratio
 

@@ -73,7 +73,7 @@ _LINK_DEFAULTS = {"link": "paper", "water": None, "attenuation": None, "bit_rate
                   "depth": DEFAULT_DEPTH, "transmitter_depth": None,
                   "receiver_dome": False, "sea_depth": None, "gimbal": None,
                   "receiver": None, "initial_elevation": 0.0, "channel_mismatch": 0.0,
-                  "transmitter_aimed": False}
+                  "transmitter_aimed": False, "lens_field_deg": None}
 
 
 @dataclass(frozen=True)

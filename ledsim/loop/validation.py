@@ -86,6 +86,8 @@ def validate_run(cfg) -> None:
     elif cfg.initial_elevation != 0.0:
         raise LedsimError(f"--initial-elevation {cfg.initial_elevation:g} is not allowed "
                           "with --gimbal yaw: only a pan-tilt head turns in elevation")
+    if cfg.lens_field_deg is not None:
+        _check_lens(cfg)
     if cfg.water is not None and cfg.water not in WATER_TYPES:
         raise LedsimError(f"unknown water {cfg.water!r}: choose one of "
                           f"{', '.join(WATER_TYPES)}")
@@ -174,6 +176,21 @@ def validate_run(cfg) -> None:
                           f"under {MIN_RUN_PEAK_SNR:g}; a shorter --distance, clearer "
                           "water or a lower --noise-scale")
     check_world(world)
+
+
+def _check_lens(cfg) -> None:
+    """A lens fits a physical receiver, narrower than its bare field; the yaw gimbal's
+    shipped KKLs were trained for the bare detector."""
+    check_ranges([("--lens-field-deg", cfg.lens_field_deg, 1.0 <= cfg.lens_field_deg < 30.0,
+                   "in [1, 30) deg: narrower than the bare detector's 30 deg")])
+    if cfg.link == "paper":
+        raise LedsimError("--lens-field-deg is not allowed with --link paper: the bench's "
+                          "photodiodes have no lens (choose a physical --link)")
+    if not cfg.world.two_axes and cfg.estimator in KKL_ON_BENCH and not cfg.checkpoint:
+        raise LedsimError(f"estimator {cfg.estimator!r} is not allowed with "
+                          "--lens-field-deg on the yaw gimbal: its shipped KKLs were "
+                          "trained for the bare 30 deg detector (use --gimbal pan-tilt, or "
+                          "ekf, ukf, pf or oracle)")
 
 
 def _check_two_axes(cfg) -> None:

@@ -129,12 +129,16 @@ class GimbalSystem(DiscreteSystem):
     def metadata(self) -> dict:
         meta = super().metadata()
         meta["constants"] = self.constants.to_dict()
-        meta["world"] = {"timestep": self.config.timestep,
-                         "water_density": self.config.water_density,
-                         "water_viscosity": self.config.water_viscosity,
-                         "gimbal_damping": self.config.gimbal_damping,
-                         "hinge_inertia": self.inertia}
+        meta["world"] = world_metadata(self.config, self.inertia)
         return meta
+
+
+def world_metadata(config: WorldConfig, inertia, **more) -> dict:
+    """What a checkpoint is checked against of a world ``config`` whose hinges have
+    ``inertia`` [kg m^2] (and ``more``)."""
+    return {"timestep": config.timestep, "water_density": config.water_density,
+            "water_viscosity": config.water_viscosity,
+            "gimbal_damping": config.gimbal_damping, "hinge_inertia": inertia, **more}
 
 
 class IdentifiedGimbalModel(DiscreteSystem):

@@ -22,6 +22,7 @@ from __future__ import annotations
 
 import numpy as np
 
+from ledsim.physics.gimbal_system import world_metadata
 from ledsim.physics.head import to_encoder
 from ledsim.physics.head_model import HeadModel
 from ledsim.physics.sensor import IrradianceSensor
@@ -108,10 +109,6 @@ class HeadSystem(DiscreteSystem):
     def metadata(self) -> dict:
         meta = super().metadata()
         meta["constants"] = self.constants.to_dict()
-        meta["world"] = {"timestep": self.config.timestep,
-                         "water_density": self.config.water_density,
-                         "water_viscosity": self.config.water_viscosity,
-                         "gimbal_damping": self.config.gimbal_damping,
-                         "hinge_inertia": self.inertia.tolist(),
-                         "home": self.home.tolist()}
+        meta["world"] = world_metadata(self.config, self.inertia.tolist(),
+                                       home=self.home.tolist())
         return meta

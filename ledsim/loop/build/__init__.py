@@ -90,8 +90,7 @@ def build_run(cfg: RunConfig, seeds: Sequence[int], record: bool = False) -> Bui
             for s, w in zip(seeds, worlds, strict=True)]
     judging = Judging(cfg.noise_scale, cfg.data_bit_rate, cfg.scenario_spec.warmup,
                       cfg.steady_from)
-    # The vehicle's line of sight turns the pan alone: not fed to a pan-tilt head yet.
-    return BuiltRun(system, model, steps, runs, judging, cfg.flat(), cfg.imu and not two)
+    return BuiltRun(system, model, steps, runs, judging, cfg.flat(), cfg.imu)
 
 
 def build_seed(cfg: RunConfig, system: GimbalSystem, model, seed: int, world: LinkWorld,

@@ -97,7 +97,7 @@ def head_estimator(cfg: RunConfig, system: HeadSystem, model: HeadModel,
     """The estimator (not the oracle) of a pan-tilt run of ``cfg`` on the head's
     ``model`` (told the calibration, :func:`head_model`): the shipped KKL of each axis,
     or a filter in four states, told the run's noise scale."""
-    est = head_kkl(model) if cfg.estimator == "kkl" else \
+    est = head_kkl(model, cfg.lens_field_deg) if cfg.estimator == "kkl" else \
         build_estimator(cfg.estimator, model, particles=cfg.particles)
     scale = (run_noise(cfg, system) if noise is None else noise).scale
     if scale != 1.0:
@@ -136,8 +136,10 @@ def head_control_step(cfg: RunConfig, system: HeadSystem, model: HeadModel, seed
     else:
         supervisor = Unsupervised(est)
     motor = HeadMotor(model.inertia, system.home.copy(), limit=limit)
+    # with the vehicle's gyro, each hinge's load observer on that axis's dynamics
+    axes = [AxisRatioModel(model, a) for a in range(2)] if cfg.imu else None
     return HeadControlStep(dropout_gate(system.constants, supervisor), supervisor, spec.law,
-                           system.constants, motor, spec.warmup)
+                           system.constants, motor, spec.warmup, axes=axes)
 
 
 def dropout_gate(constants, supervisor) -> DropoutGate:
