@@ -65,7 +65,7 @@ class AxisRatioModel(DiscreteSystem):
 
     def f(self, x, u=0.0):
         if np.ndim(x) == 1 and np.ndim(u) == 0:  # one sample: plain floats, ~10x faster
-            angle, rate = float(x[0]), float(x[1])
+            angle, rate = np.asarray(x, dtype=float).tolist()  # (angle, rate)
             u, drag = float(u), abs(rate) * rate
             (a1, a2, a3), (b1, b2, b3) = self._coefs
             return np.array([angle + (a1 * rate + a2 * u + a3 * drag),
