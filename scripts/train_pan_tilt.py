@@ -22,12 +22,9 @@ for _name in ("OMP_NUM_THREADS", "OPENBLAS_NUM_THREADS", "MKL_NUM_THREADS"):
 os.environ.setdefault("MUJOCO_GL", "osmesa")
 
 import argparse  # noqa: E402
-from dataclasses import replace  # noqa: E402
 
-from ledsim.experiment.observer_presets import observer_preset  # noqa: E402
 from ledsim.files.outputs import save_checkpoint  # noqa: E402
-from ledsim.loop.build.head_kkl import AXES, reference_axes, shipped_axis  # noqa: E402
-from observer.kkl.training import train_kkl  # noqa: E402
+from ledsim.loop.build.head_kkl import shipped_axis, train_pair  # noqa: E402
 
 
 def main() -> int:
@@ -38,11 +35,8 @@ def main() -> int:
     ap.add_argument("--lens-field-deg", type=float, default=None,
                     help="the pair of a lensed receiver of this half-power field [deg]")
     args = ap.parse_args()
-    for axis, name in enumerate(AXES):
-        system = reference_axes(args.lens_field_deg)[axis]
-        design, config = observer_preset("default", system.Te)
-        config = replace(config, n_samples=args.samples, hidden=args.hidden, seed=args.seed)
-        kkl, report = train_kkl(system, design, config, progress=True)
+    for name, kkl, report in train_pair(args.lens_field_deg, args.samples, args.hidden,
+                                        args.seed):
         path = save_checkpoint(kkl, shipped_axis(name, args.lens_field_deg), extra={
             "pan_tilt_axis": name, "samples": args.samples, "hidden": args.hidden,
             "lens_field_deg": args.lens_field_deg})

@@ -165,3 +165,23 @@ def test_a_lens_narrows_the_field_and_gathers_more_light():
                    initial_angle=0.1, seconds=2.0)
     m = run_batch(spec, [0])[0].metrics  # the lensed pair of the shipped KKL
     assert m.rmse_steady["pointing"] < 2e-3 and m.availability > 0.95, m
+
+
+def test_a_users_pair_is_trained_and_run_with_checkpoint(tmp_path):
+    """``ledsim train --gimbal pan-tilt`` writes the pair (a small one here), and ``ledsim
+    run --gimbal pan-tilt --checkpoint NAME`` runs it; a missing half is refused."""
+    name = tmp_path / "pair.safetensors"
+    r = run_cli("train", "--world", "mujoco", "--gimbal", "pan-tilt", "--samples", "2000",
+                "--out", str(name), "--quiet")
+    assert r.returncode == 0, r.stderr
+    assert {p.name for p in tmp_path.glob("*.safetensors")} == {
+        "pair_azimuth.safetensors", "pair_elevation.safetensors"}
+    out = tmp_path / "run"
+    r = run_cli("run", "--gimbal", "pan-tilt", "--checkpoint", str(name), "--seeds", "1",
+                "--seconds", "1", "--out", str(out), "--quiet")
+    assert r.returncode == 0, r.stderr
+    assert json.loads((out / "results.json").read_text())["availability"]["mean"] > 0.9
+    (tmp_path / "pair_elevation.safetensors").unlink()
+    r = run_cli("run", "--gimbal", "pan-tilt", "--checkpoint", str(name), "--out",
+                str(tmp_path / "bad"))
+    assert_user_error(r, "pair_elevation.safetensors' is missing")

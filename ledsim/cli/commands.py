@@ -228,6 +228,8 @@ def train(args) -> int:
     if out.with_suffix(".safetensors").is_dir():
         raise LedsimError(f"--out {str(args.out)!r}: {str(out.with_suffix('.safetensors'))!r} "
                           "is a folder")
+    if args.gimbal == "pan-tilt":
+        return _train_pair(args)
     if args.world == "mujoco":
         from ledsim.loop.world_training import train_mujoco_observer
 
@@ -247,6 +249,26 @@ def train(args) -> int:
     log.info(f"trained {args.design or 'default'} observer ({args.world}) in "
              f"{report.seconds:.1f} s: "
              f"L_dyn={report.loss_dyn:.2e}, L_recon={report.loss_recon:.2e}; wrote {path}")
+    return 0
+
+
+def _train_pair(args) -> int:
+    """``ledsim train --gimbal pan-tilt``: the pan-tilt's pair, one KKL per axis on the
+    head's dynamics fitted to MuJoCo (``--world mujoco``), to NAME_azimuth and
+    NAME_elevation."""
+    from ledsim.loop.build.head_kkl import pair_paths, train_pair
+
+    if args.world != "mujoco" or args.design not in (None, "default"):
+        raise LedsimError("--gimbal pan-tilt trains in the MuJoCo world's head, the default "
+                          "design: use --world mujoco (and no --design)")
+    paths = pair_paths(args.out)
+    for name, obs, report in train_pair(args.lens_field_deg, args.samples, seed=args.seed,
+                                        progress=not args.quiet):
+        path = save_checkpoint(obs, paths[name], extra={
+            "pan_tilt_axis": name, "samples": args.samples,
+            "lens_field_deg": args.lens_field_deg})
+        log.info(f"trained the pan-tilt's {name} in {report.seconds:.1f} s: "
+                 f"L_dyn={report.loss_dyn:.2e}, L_recon={report.loss_recon:.2e}; wrote {path}")
     return 0
 
 

@@ -23,6 +23,8 @@ def export(args) -> int:
     from observer.kkl.export import kkl_step_graph
 
     out = check_out_file(args.out, ".onnx")
+    if getattr(args, "gimbal", "yaw") == "pan-tilt":
+        return _export_pair(args, out)
     path = args.checkpoint or require_shipped_checkpoint(PAPER_DISTANCE, "mujoco")
     saved = checkpoint.metadata(path)["system"]
     constants = constants_from_dict(saved["constants"])
@@ -51,4 +53,34 @@ def export(args) -> int:
     atomic_write_bytes(out, lambda tmp: Path(tmp).write_bytes(graph.SerializeToString()))
     log.info(f"wrote {out}: one step of {path} ({saved.get('class')}, q = {obs.q}); inputs "
              "z, y [W], u [rad/s^2]; outputs x_hat, z_next")
+    return 0
+
+
+def _export_pair(args, out: Path) -> int:
+    """``ledsim export --gimbal pan-tilt``: each axis's KKL of the pan-tilt's pair (the
+    shipped one, or ``--checkpoint NAME``'s) as its own ONNX step, on that axis's ratios
+    (its pair's powers over the data detector's), to NAME_azimuth.onnx and
+    NAME_elevation.onnx of ``--out NAME.onnx``."""
+    from ledsim.files.outputs import atomic_write_bytes
+    from ledsim.loop.build.head_kkl import AXES, pair_paths, reference_axes, shipped_axis
+    from observer.kkl import checkpoint
+    from observer.kkl.export import kkl_step_graph
+
+    lens = getattr(args, "lens_field_deg", None)
+    written = []
+    for name, system in zip(AXES, reference_axes(lens), strict=True):
+        path = shipped_axis(name, lens) if args.checkpoint is None else \
+            pair_paths(args.checkpoint)[name]
+        if not path.is_file():
+            raise LedsimError(f"no KKL for the pan-tilt's {name} at {str(path)!r} (ledsim "
+                              "train --gimbal pan-tilt --out NAME writes a pair)")
+        obs = checkpoint.load(path, system)
+        graph = kkl_step_graph(obs, system.step_form(), name=f"kkl_pan_tilt_{name}")
+        target = out.with_name(f"{out.stem}_{name}.onnx")
+        atomic_write_bytes(target, lambda tmp, g=graph: Path(tmp).write_bytes(
+            g.SerializeToString()))
+        written.append(str(target))
+    log.info(f"wrote {', '.join(written)}: one step of each axis's KKL; inputs z, y (that "
+             "axis's pair over the data detector's power), u [rad/s^2]; outputs x_hat "
+             "(angle [rad], rate [rad/s]), z_next")
     return 0

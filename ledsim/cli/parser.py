@@ -117,6 +117,13 @@ def build_parser() -> argparse.ArgumentParser:
     tr.add_argument("--samples", type=number(1000, 1_000_000, integer=True), default=200_000,
                     help="training transitions")
     tr.add_argument("--seed", type=SEED, default=0, help="seed of data and features")
+    tr.add_argument("--gimbal", default="yaw", **choices(("yaw", "pan-tilt")),
+                    help="pan-tilt: the pan-tilt head's pair, one KKL per axis (with "
+                         "--world mujoco), written to NAME_azimuth and NAME_elevation of "
+                         "--out NAME; ledsim run --gimbal pan-tilt --checkpoint NAME runs it")
+    tr.add_argument("--lens-field-deg", type=number(1.0, 29.9, "deg"), default=None,
+                    metavar="F", help="with --gimbal pan-tilt: behind a lens of this "
+                                      "half-power field")
     tr.add_argument("--out", required=True, help="checkpoint path (.safetensors; a .pt "
                     "name writes its .safetensors sibling)")
 
@@ -124,6 +131,12 @@ def build_parser() -> argparse.ArgumentParser:
     ex.add_argument("--checkpoint", help="KKL checkpoint (default: the shipped MuJoCo "
                     "observer of d = 0.085 m)")
     ex.add_argument("--format", default="onnx", **choices(("onnx",)), help="file format")
+    ex.add_argument("--gimbal", default="yaw", **choices(("yaw", "pan-tilt")),
+                    help="pan-tilt: the pan-tilt head's pair (shipped, or --checkpoint "
+                         "NAME's), each axis to NAME_azimuth.onnx and NAME_elevation.onnx "
+                         "of --out NAME.onnx")
+    ex.add_argument("--lens-field-deg", type=number(1.0, 29.9, "deg"), default=None,
+                    metavar="F", help="with --gimbal pan-tilt: the shipped pair of this lens")
     ex.add_argument("--out", required=True, help="output file (.onnx)")
 
     rp = command("replay", "feed a saved trace's estimator inputs to a fresh estimator "

@@ -63,3 +63,18 @@ def require_shipped_checkpoint(distance: float, world: str = "closed-form",
         raise LedsimError(f"no shipped {kind} for distance {distance:g} m: train one with "
                           f"{how} and pass --checkpoint PATH")
     return path
+
+
+def shipped_axis(name: str, lens_field_deg: float | None = None) -> Path:
+    """The shipped KKL of axis ``name`` (``azimuth`` or ``elevation``), for the bare detector or
+    a lens of half-power field ``lens_field_deg`` [deg]."""
+    lens = "" if lens_field_deg is None else f"_lens{lens_field_deg:g}"
+    return checkpoint_dir() / f"kkl_pan_tilt{lens}_{name}.safetensors"
+
+
+def pair_paths(path: str | Path) -> dict[str, Path]:
+    """A pair's two checkpoints for the name ``path`` (``my.safetensors``:
+    ``my_azimuth.safetensors`` and ``my_elevation.safetensors``), by axis."""
+    base = Path(path)
+    stem = base.stem if base.suffix in (".safetensors", ".pt") else base.name
+    return {name: base.with_name(f"{stem}_{name}.safetensors") for name in ("azimuth", "elevation")}

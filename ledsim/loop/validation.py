@@ -206,8 +206,16 @@ def _check_two_axes(cfg) -> None:
         raise LedsimError(f"--filter-distance {cfg.filter_distance} is not allowed with "
                           "--gimbal pan-tilt: its filters know the configured distance")
     if cfg.checkpoint:
-        raise LedsimError("--checkpoint is not allowed with --gimbal pan-tilt: its KKL "
-                          "is the shipped pair of one-axis observers")
+        from ledsim.files.resources import pair_paths
+
+        if cfg.estimator != "kkl":
+            raise LedsimError(f"--checkpoint is not allowed with --estimator "
+                              f"{cfg.estimator} on a pan-tilt head: it is the KKL's pair")
+        missing = [str(p) for p in pair_paths(cfg.checkpoint).values() if not p.is_file()]
+        if missing:
+            raise LedsimError(f"--checkpoint {cfg.checkpoint!r} on a pan-tilt head names a "
+                              f"pair: {missing[0]!r} is missing (ledsim train --gimbal "
+                              "pan-tilt --out NAME writes NAME_azimuth and NAME_elevation)")
 
 
 @functools.lru_cache(maxsize=32)

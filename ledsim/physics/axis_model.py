@@ -127,6 +127,16 @@ class AxisRatioModel(DiscreteSystem):
             return None
         return fix
 
+    def step_form(self):
+        """f and h for an exported observer (:class:`observer.kkl.export.StepForm`): h
+        the pair's responses over the data detector's."""
+        from dataclasses import replace
+
+        from ledsim.radiometry.optics import step_form
+
+        form = step_form(*self._coef, 1.0, self.constants, (0.0, 0.0), (1e300, 1e300))
+        return replace(form, offsets=tuple(float(d) for d in self.turns), ratio_to=0.0)
+
     def split(self, y) -> np.ndarray:
         """This axis's outputs from the head's powers ``y`` [W], each channel first
         divided by its calibrated gain (the head model's ``channel_gains``)."""

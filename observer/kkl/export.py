@@ -50,6 +50,8 @@ class StepForm:
         output_low, output_high: the usable range of each output [W].
         offsets: each photodiode's incidence angle less the state's phi [rad] (None: the
             paper's pair, (0, dphi)).
+        ratio_to: h as ratios: each output g(phi + o_i) / g(phi + ratio_to), gain unused
+            (one axis of a pan-tilt's quad over its data detector; None: powers).
     """
 
     coef_phi: tuple[float, float, float]
@@ -60,6 +62,7 @@ class StepForm:
     output_low: tuple[float, ...]
     output_high: tuple[float, ...]
     offsets: tuple[float, ...] | None = None
+    ratio_to: float | None = None
 
     @property
     def photodiode_offsets(self) -> tuple[float, ...]:
@@ -129,12 +132,17 @@ def _h(g: _Graph, form: StepForm, x: str) -> str:
     pair = g.op("Concat", *(phi if o == 0.0 else g.op("Add", phi, g.const([o]))
                             for o in form.photodiode_offsets), axis=0)
 
-    def gauss(c, shift, width):
-        q = g.op("Div", g.op("Add", pair, g.const([shift])), g.const([width]))
+    def gauss(angles, c, shift, width):
+        q = g.op("Div", g.op("Add", angles, g.const([shift])), g.const([width]))
         return g.op("Mul", g.const([c]), g.op("Exp", g.op("Neg", g.op("Mul", q, q))))
 
-    return g.op("Mul", g.const([form.gain]), g.op("Add", gauss(c1, -m1, w1),
-                                                   gauss(c2, m2, w2)))
+    def response(angles):
+        return g.op("Add", gauss(angles, c1, -m1, w1), gauss(angles, c2, m2, w2))
+
+    if form.ratio_to is not None:  # each over the divisor's response
+        divisor = g.op("Add", phi, g.const([form.ratio_to]))
+        return g.op("Div", response(pair), response(divisor))
+    return g.op("Mul", g.const([form.gain]), response(pair))
 
 
 def kkl_step_graph(obs: KKLObserver, form: StepForm, name: str = "kkl_step"):

@@ -97,7 +97,8 @@ def head_estimator(cfg: RunConfig, system: HeadSystem, model: HeadModel,
     """The estimator (not the oracle) of a pan-tilt run of ``cfg`` on the head's
     ``model`` (told the calibration, :func:`head_model`): the shipped KKL of each axis,
     or a filter in four states, told the run's noise scale."""
-    est = head_kkl(model, cfg.lens_field_deg) if cfg.estimator == "kkl" else \
+    est = head_kkl(model, cfg.lens_field_deg, cfg.checkpoint) if cfg.estimator == "kkl" \
+        else \
         build_estimator(cfg.estimator, model, particles=cfg.particles)
     scale = (run_noise(cfg, system) if noise is None else noise).scale
     if scale != 1.0:

@@ -177,7 +177,18 @@ def loop_checkpoint(cfg: RunConfig) -> Path:
 
 
 def check_checkpoint(cfg: RunConfig) -> None:
-    """Fail fast (before any worker starts) on a checkpoint that does not fit."""
+    """Fail fast (before any worker starts) on a checkpoint that does not fit (a pan-tilt
+    pair: each half against its axis's system in the world it was trained in)."""
+    if cfg.world.two_axes:
+        if cfg.estimator == "kkl":
+            from ledsim.loop.build.head_kkl import AXES, pair_paths, reference_axes, shipped_axis
+
+            for name, system in zip(AXES, reference_axes(cfg.lens_field_deg), strict=True):
+                path = shipped_axis(name, cfg.lens_field_deg) if not cfg.checkpoint else \
+                    pair_paths(cfg.checkpoint)[name]
+                if path.is_file():  # a missing one is refused, naming it, as the run builds
+                    ckpt.load(path, system)
+        return
     if cfg.estimator in KKL_ESTIMATORS:
         for m in kkl_members(cfg):
             ckpt.load(m.checkpoint, member_system(m.world))  # the run's own, built once

@@ -14,7 +14,7 @@ import functools
 from pathlib import Path
 
 from ledsim.errors import LedsimError
-from ledsim.files.resources import checkpoint_dir
+from ledsim.files.resources import pair_paths, shipped_axis  # noqa: F401 (here before)
 from ledsim.physics.axis_model import AxisRatioModel
 from ledsim.physics.head_model import HeadModel
 from observer.kkl import checkpoint as ckpt
@@ -26,13 +26,6 @@ AXES = ("azimuth", "elevation")
 
 #: The lenses whose pair ships (half-power field [deg]; None: the bare detector).
 SHIPPED_LENSES = (None, 10.0)
-
-
-def shipped_axis(name: str, lens_field_deg: float | None = None) -> Path:
-    """The shipped KKL of axis ``name`` (one of :data:`AXES`), for the bare detector or
-    a lens of half-power field ``lens_field_deg`` [deg]."""
-    lens = "" if lens_field_deg is None else f"_lens{lens_field_deg:g}"
-    return checkpoint_dir() / f"kkl_pan_tilt{lens}_{name}.safetensors"
 
 
 def reference_world(lens_field_deg: float | None = None):
@@ -54,16 +47,41 @@ def reference_axes(lens_field_deg: float | None = None
     return tuple(AxisRatioModel(head, a) for a in range(len(AXES)))
 
 
-def head_kkl(model: HeadModel, lens_field_deg: float | None = None) -> PerAxis:
-    """The shipped KKL of a pan-tilt run whose head's model is ``model`` (behind a lens
-    of half-power field ``lens_field_deg`` [deg]): each axis's observer, checked against
-    that axis's system, on its ratios of the run's powers."""
+def train_pair(lens_field_deg: float | None = None, samples: int = 200_000,
+               hidden: int = 500, seed: int = 0, progress: bool = True) -> list:
+    """Each axis's KKL of the default design, trained by Algorithm 1 on its system in
+    :func:`reference_world`: ``[(axis, observer, report), ...]``."""
+    from dataclasses import replace
+
+    from ledsim.experiment.observer_presets import observer_preset
+    from observer.kkl.training import train_kkl
+
+    out = []
+    for name, system in zip(AXES, reference_axes(lens_field_deg), strict=True):
+        design, config = observer_preset("default", system.Te)
+        config = replace(config, n_samples=samples, hidden=hidden, seed=seed)
+        kkl, report = train_kkl(system, design, config, progress=progress)
+        out.append((name, kkl, report))
+    return out
+
+
+def head_kkl(model: HeadModel, lens_field_deg: float | None = None,
+             checkpoint: str | Path | None = None) -> PerAxis:
+    """The KKL of a pan-tilt run whose head's model is ``model`` (behind a lens of
+    half-power field ``lens_field_deg`` [deg]): the shipped pair, or the user's
+    ``checkpoint`` pair (:func:`pair_paths`); each axis's observer, checked against that
+    axis's system, on its ratios of the run's powers."""
     axes = [AxisRatioModel(model, a) for a in range(len(AXES))]
     observers = []
     for system, name in zip(axes, AXES, strict=True):
-        path = shipped_axis(name, lens_field_deg)
+        path = shipped_axis(name, lens_field_deg) if checkpoint is None else \
+            pair_paths(checkpoint)[name]
         if not path.is_file():
             lens = "" if lens_field_deg is None else f" --lens-field-deg {lens_field_deg:g}"
+            if checkpoint is not None:
+                raise LedsimError(f"--checkpoint {str(checkpoint)!r}: no {str(path)!r} for "
+                                  f"the pan-tilt's {name} (ledsim train --gimbal pan-tilt "
+                                  "writes the pair)")
             raise LedsimError(f"no shipped KKL for the pan-tilt's {name}{lens}: train it "
                               f"with `python scripts/train_pan_tilt.py{lens}`")
         observers.append(ckpt.load(path, system, name=f"kkl-{name}"))
