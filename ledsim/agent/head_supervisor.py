@@ -31,7 +31,7 @@ import math
 import numpy as np
 
 from ledsim.agent.axes import angles_rates, magnitude
-from ledsim.agent.pan_tilt import pan_gain, to_encoder, to_head
+from ledsim.agent.pan_tilt import to_encoder, to_head
 from ledsim.agent.spiral import SpiralScan
 from ledsim.agent.step import Decision
 
@@ -103,19 +103,13 @@ class HeadSupervisor:
         """The estimate carried on the encoder: the LED where it was last seen."""
         return np.r_[to_head(self.target - q, q), -to_head(qdot, q)]
 
-    @staticmethod
-    def _head_input(u: np.ndarray, q: np.ndarray) -> np.ndarray:
-        """An input the slew or the scan gives per hinge, in the head's frame (the
-        motor divides the pan's by its gain again: ``agent/pan_tilt.py``)."""
-        u = np.array(u, dtype=float)
-        u[0] *= pan_gain(q[1])
-        return u
-
+    # The slew's and the scan's inputs per hinge, in the head's frame (the motor turns
+    # them back: agent/pan_tilt.py).
     def _slew(self, q: np.ndarray, qdot: np.ndarray) -> np.ndarray:
-        return self._head_input(self.slew.command(q, qdot, self.target), q)
+        return to_head(self.slew.command(q, qdot, self.target), q)
 
     def _scan(self, q: np.ndarray, qdot: np.ndarray) -> np.ndarray:
-        return self._head_input(self.spiral.command(q, qdot), q)
+        return to_head(self.spiral.command(q, qdot), q)
 
     # -- the step ----------------------------------------------------------------------
 

@@ -29,23 +29,14 @@ class HeadMotor(GimbalMotor):
 
     tilt = 0.0
 
-    def _encoder(self, u) -> np.ndarray:
-        u = np.array(u, dtype=float)
-        u[0] /= pan_gain(self.tilt)
-        return u
-
     def torque(self, u):
-        return super().torque(self._encoder(u))
+        return super().torque(to_encoder(u, (0.0, self.tilt)))
 
     def applied(self, u):
-        a = super().applied(self._encoder(u))
-        a[0] *= pan_gain(self.tilt)
-        return a
+        return to_head(super().applied(to_encoder(u, (0.0, self.tilt))), (0.0, self.tilt))
 
     def hold(self, q, qdot):
-        u = super().hold(q, qdot)  # the encoders' PD, in the head's frame
-        u[0] *= pan_gain(self.tilt)
-        return u
+        return to_head(super().hold(q, qdot), (0.0, self.tilt))  # the encoders' PD
 
 
 class HeadControlStep(ControlStep):
@@ -85,22 +76,12 @@ class HeadControlStep(ControlStep):
                          for i, o in enumerate(self.loads)])
         self._turned += base * self.constants.Te
         q_in, qdot_in = q + self._turned, qdot + base
-        gain = pan_gain(act.tilt)
-        load_head = np.array([load[0] * gain, load[1]])  # in the head's frame
-        self.y_gated = self.gate(y)
-        d = self.supervisor.step(t, self.y_gated, q_in, qdot_in)
-        if d.reseeded:
-            self.law = self.law_template.start(self.constants)
-        if d.u is not None:  # the slew or the scan: the model misses fast turns, no load
-            command, load_head = d.u, np.zeros(2)
-        elif t < self.warmup:
-            command = act.hold(q_in, qdot_in)
-        else:
-            command = self.law(d.xhat, t)
-        self._holding = d.u is None and t < self.warmup
-        self._last_command = command
+        d, command, _ = self._decide(y, t, q_in, qdot_in)
+        # the load in the head's frame; none while the slew or the scan has the motors
+        # (the model misses fast turns)
+        load_head = to_head(load, q) if d.u is None else np.zeros(2)
         motor = act.applied(np.asarray(command, dtype=float) - load_head)
-        self._motor_enc = np.array([motor[0] / gain, motor[1]])
+        self._motor_enc = to_encoder(motor, q)
         u = motor + load_head  # what the angles get: the motor's and the load's
         self.supervisor.predict(u)
         self.decision, self.u = d, u

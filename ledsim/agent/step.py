@@ -256,6 +256,25 @@ class ControlStep:
     def estimator(self):
         return self.supervisor.estimator
 
+    def _decide(self, y: np.ndarray, t: float, q, qdot) -> tuple[Decision, object, object]:
+        """Gate, supervise and choose: (the decision, the command u [rad/s^2] before
+        the motor, and the u the estimator is told of it) at encoder ``q``, ``qdot``."""
+        self.y_gated = self.gate(y)
+        d = self.supervisor.step(t, self.y_gated, q, qdot)
+        if d.reseeded:
+            self.law = self.law_template.start(self.constants)
+        if d.u is not None:  # the acquisition has the motor
+            u = command = d.u
+        elif t < self.warmup:  # the estimator is still forgetting its initial guess
+            command, u = self.actuator.hold(q, qdot), 0.0
+        else:
+            if self._holding and hasattr(self.law, "take_over"):
+                self.law.take_over(self._last_command)
+            u = command = self.law(d.xhat, t)
+        self._holding = d.u is None and t < self.warmup
+        self._last_command = command
+        return d, command, u
+
     def __call__(self, y: np.ndarray, t: float, q: float = 0.0, qdot: float = 0.0,
                  los=None) -> float:
         """The motor torque [N m] (u itself for :class:`DirectInput`) of step ``t`` [s]
@@ -270,21 +289,8 @@ class ControlStep:
             load = 0.0 if self.load is None else \
                 self.load.update(qdot + los.hull_rate, self._motor_u)
             q, qdot = q - los.bearing, qdot - los.incidence_rate
-        self.y_gated = self.gate(y)
-        d = self.supervisor.step(t, self.y_gated, q, qdot)
-        if d.reseeded:
-            self.law = self.law_template.start(self.constants)
+        d, command, u = self._decide(y, t, q, qdot)
         act = self.actuator
-        if d.u is not None:  # the acquisition has the motor
-            u = command = d.u
-        elif t < self.warmup:  # the estimator is still forgetting its initial guess
-            command, u = act.hold(q, qdot), 0.0
-        else:
-            if self._holding and hasattr(self.law, "take_over"):
-                self.law.take_over(self._last_command)
-            u = command = self.law(d.xhat, t)
-        self._holding = d.u is None and t < self.warmup
-        self._last_command = command
         if los is not None:  # turn with the bearing, cancel the load; phi'' gets the rest
             command = command - los.acceleration - load
             self._motor_u = act.applied(command)
