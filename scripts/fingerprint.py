@@ -44,8 +44,10 @@ CASES = ([(f"{e}", dict(estimator=e)) for e in LOOP_ESTIMATORS]
                                         filter_distance="nominal")),
             ("oracle if2", dict(estimator="oracle", scenario="if2")),
             # Physical links: the scheduled KKL's gain tracking, the sea, the vehicle.
-            ("kkl luma 30 m", dict(link="luma", distance=30.0)),
-            ("ekf luma 30 m waves", dict(estimator="ekf", link="luma", distance=30.0,
+            # (the yaw gimbal, named: a physical link's default is the pan-tilt)
+            ("kkl luma 30 m", dict(link="luma", gimbal="yaw", distance=30.0)),
+            ("ekf luma 30 m waves", dict(estimator="ekf", link="luma", gimbal="yaw",
+                                         distance=30.0,
                                          depth=10.0,
                                          disturbances=("waves:height=1,period=8",)))])
 

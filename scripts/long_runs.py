@@ -184,8 +184,10 @@ def main() -> int:
     if args.seeds < 1 or not args.minutes > 1:
         ap.error("--seeds must be >= 1 and --minutes > 1")
     rows = [r for r in ROWS if not args.rows or any(r[0].startswith(p) for p in args.rows)]
+    # the yaw gimbal's table (a physical link's default head is the pan-tilt)
     cases = [(name, est, RunConfig(scenario="align", estimator=est, seeds=args.seeds,
-                                   seconds=60.0 * args.minutes, window=WINDOW, **kw))
+                                   seconds=60.0 * args.minutes, window=WINDOW,
+                                   **{"gimbal": "yaw", **kw}))
              for name, kw in rows for est in ESTIMATORS]
     jobs = [(cfg, seed) for *_, cfg in cases for seed in range(args.seeds)]
     outs = run_jobs(_job, jobs, args.workers, "long runs", True)

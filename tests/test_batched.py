@@ -35,11 +35,16 @@ def _assert_identical(a, b, what: str) -> None:
     dict(estimator="ekf", disturbances=("kick:start=1.5,rate=8",)),
     dict(estimator="kkl", disturbances=("vibration:frequency=3,torque=0.5",
                                         "current:speed=0.05,gust=0.02")),
+    dict(estimator="kkl", link="luma", gimbal="yaw", disturbances=("scintillation", "flicker")),
+    dict(estimator="ekf", link="luma", gimbal="yaw", depth=3.0,
+         disturbances=("waves:height=1.5,period=6,heading=1.5708",)),
+    # the pan-tilt (a physical link's default): its first step reads the gyro
     dict(estimator="kkl", link="luma", disturbances=("scintillation", "flicker")),
     dict(estimator="ekf", link="luma", depth=3.0,
          disturbances=("waves:height=1.5,period=6,heading=1.5708",)),
 ], ids=["kkl", "pf", "oracle", "occlusion-kkl", "kick-supervised-ekf",
-        "vibration-current-bank", "light-luma-kkl", "strip-waves-luma-ekf"])
+        "vibration-current-bank", "light-luma-kkl", "strip-waves-luma-ekf",
+        "light-luma-pan-tilt-kkl", "strip-waves-luma-pan-tilt-ekf"])
 def test_a_batch_gives_each_seed_its_single_run_exactly(kw):
     cfg = RunConfig(seconds=2.5, **kw)
     batch = run_batch(cfg, [0, 1, 2], keep_trace=True, threads=2)

@@ -284,7 +284,8 @@ def test_while_lost_the_run_reports_the_held_estimate():
 
 
 def test_results_json_and_the_sweeps_csv_count_the_losses(tmp_path):
-    r = run_cli("run", "--disturbance", "kick:start=2.5", "--seconds", "6", "--seeds", "1",
+    r = run_cli("run", "--gimbal", "yaw",
+                "--disturbance", "kick:start=2.5", "--seconds", "6", "--seeds", "1",
                 "--workers", "1", "--no-plot", "-q", "--window", "3",
                 "--out", str(tmp_path / "o"))
     assert r.returncode == 0, r.stderr

@@ -8,7 +8,7 @@ from conftest import run_cli
 
 def _run(tmp_path, transmitter_depth: float):
     out = tmp_path / f"tx{transmitter_depth:g}"
-    r = run_cli("run", "--link", "luma", "--depth", "20", "--transmitter-depth",
+    r = run_cli("run", "--link", "luma", "--gimbal", "yaw", "--depth", "20", "--transmitter-depth",
                 str(transmitter_depth), "--estimator", "oracle", "--seeds", "1",
                 "--seconds", "1", "--no-plot", "--quiet", "--out", str(out))
     assert r.returncode == 0, r.stderr

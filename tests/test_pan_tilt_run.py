@@ -88,8 +88,8 @@ def test_the_two_axis_oracle_points_at_an_elevated_led_that_the_yaw_gimbal_canno
     pointing loss <= 0.05 dB on the data detector (0.997 and 0.003 dB measured), where
     the yaw gimbal's oracle loses 1.27 dB and never counts as available."""
     spec = RunSpec(**ELEVATED, estimator="oracle", seconds=3.0)
-    two = run_batch(replace(spec, gimbal="pan-tilt"), [0])[0].metrics
-    one = run_batch(spec, [0])[0].metrics
+    two = run_batch(spec, [0])[0].metrics  # a physical link's default head
+    one = run_batch(replace(spec, gimbal="yaw"), [0])[0].metrics
     assert two.availability >= 0.99 and two.pointing_loss_db <= 0.05, two
     assert one.availability < 0.1 and one.pointing_loss_db > 1.0, one
 
@@ -158,7 +158,7 @@ def test_a_lens_narrows_the_field_and_gathers_more_light():
     gain = peak_power(lens) / peak_power(bare)
     assert 4.0 < gain < area, gain
     with pytest.raises(LedsimError, match="trained for the bare 30 deg detector"):
-        RunSpec(link="luma", lens_field_deg=10.0).validate()
+        RunSpec(link="luma", gimbal="yaw", lens_field_deg=10.0).validate()
     with pytest.raises(LedsimError, match="--lens-field-deg 40.0 is not allowed"):
         RunSpec(link="luma", gimbal="pan-tilt", lens_field_deg=40.0).validate()
     spec = RunSpec(link="luma", distance=40.0, gimbal="pan-tilt", lens_field_deg=10.0,

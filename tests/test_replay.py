@@ -66,8 +66,39 @@ def test_the_onnx_export_replays_to_1e_6(tmp_path):
     assert replay(path).max_abs_difference <= 1e-9  # and the numpy observer, exactly
 
 
+@pytest.mark.parametrize("kw, export", [
+    (dict(estimator="kkl"), ["--checkpoint", str(require_shipped_checkpoint(
+        0.085, "mujoco", "scheduled"))]),  # the bench's default, gain-scheduled
+    (dict(estimator="kkl", link="luma", seconds_=3.0), ["--gimbal", "pan-tilt"]),
+], ids=["scheduled", "pan-tilt"])
+def test_the_default_kkl_replays_through_its_onnx_export_to_1e_6(tmp_path, kw, export):
+    """What ``kkl`` runs by default: on the bench the gain-scheduled KKL (its maps in the
+    graph, its schedule beside it); on a physical link the pan-tilt's pair (one exported
+    step per axis, on that axis's ratios)."""
+    pytest.importorskip("onnxruntime")
+    path, _ = _save(tmp_path, **kw)
+    onnx = tmp_path / "kkl.onnx"
+    r = run_cli("export", *export, "--out", str(onnx), "-q")
+    assert r.returncode == 0, r.stderr
+    r = run_cli("replay", str(path), "--onnx", str(onnx), "--json")
+    assert r.returncode == 0, r.stderr
+    res = json.loads(r.stdout)
+    assert res["against"] == "onnx" and res["estimates"] >= 150
+    assert res["max_abs_difference"] <= 1e-6
+    if "--gimbal" in export:  # a missing half is refused in one line
+        (tmp_path / "kkl_elevation.onnx").unlink()
+        assert_user_error(run_cli("replay", str(path), "--onnx", str(onnx)),
+                          "kkl_elevation.onnx' does not exist")
+    else:  # the maps of another observer are refused
+        other = tmp_path / "fixed.onnx"
+        r = run_cli("export", "--out", str(other), "-q")
+        assert r.returncode == 0, r.stderr
+        assert_user_error(run_cli("replay", str(path), "--onnx", str(other)),
+                          "is not the maps of a gain-scheduled KKL")
+
+
 def test_replay_refuses_what_it_cannot_replay_in_one_line(tmp_path):
-    path, _ = _save(tmp_path, estimator="kkl")  # the gain-scheduled KKL
+    path, _ = _save(tmp_path, estimator="ekf")
     r = run_cli("replay", str(path), "--onnx", str(tmp_path / "x.onnx"))
     assert_user_error(r, "not one: replay it without --onnx")
     oracle, _ = _save(tmp_path, "oracle", estimator="oracle")
@@ -84,7 +115,8 @@ def test_replay_refuses_what_it_cannot_replay_in_one_line(tmp_path):
 
 
 def test_run_save_trace_keeps_the_record_and_replay_reads_it(tmp_path):
-    r = run_cli("run", "--estimator", "ekf", "--disturbance", OCCLUSION[0], "--seconds",
+    r = run_cli("run", "--gimbal", "yaw",
+                "--estimator", "ekf", "--disturbance", OCCLUSION[0], "--seconds",
                 "3", "--seeds", "1", "--save-trace", "--no-plot", "-q", "--out",
                 str(tmp_path / "o"))
     assert r.returncode == 0, r.stderr

@@ -180,7 +180,8 @@ def test_the_bank_holds_a_far_link_with_its_noisier_member():
 
 
 def test_cli_run_writes_loss_and_recovery_times(tmp_path):
-    r = run_cli("run", "--disturbance", "kick:start=2.5", "--seconds", "6", "--seeds", "1",
+    r = run_cli("run", "--gimbal", "yaw",
+                "--disturbance", "kick:start=2.5", "--seconds", "6", "--seeds", "1",
                 "--workers", "1", "--no-plot", "-q", "--out", str(tmp_path / "o"))
     assert r.returncode == 0, r.stderr
     res = json.loads((tmp_path / "o" / "results.json").read_text())

@@ -140,7 +140,10 @@ class Vehicle(Rows):
         for part in cls.PARTS:
             parts = [getattr(i, part) for i in items]
             setattr(out, part, None if parts[0] is None else type(parts[0]).stacked(parts))
-        out._reading = None
+        # each vehicle's reading of its start (a pan-tilt's first step reads its gyro)
+        readings = [i._reading for i in items]
+        out._reading = None if any(r is None for r in readings) else \
+            NavigationReading.stacked(readings)
         return out
 
     def put(self, row: int, item) -> None:

@@ -27,6 +27,7 @@ mode            what the head does
 from __future__ import annotations
 
 import math
+from collections import deque
 
 import numpy as np
 
@@ -53,13 +54,21 @@ class HeadSupervisor:
         patience: how long a lost head waits where the LED was before it scans [s].
         arrive_tol, arrive_rate: an acquisition arrives within this angle [rad] of the
             fix on each axis, turning slower than this [rad/s].
-        reslew: a tracked estimate this far off the boresight [rad] is slewed to.
+        reslew: a tracked estimate this far off the boresight [rad], or this far from
+            the fix, is slewed to ...
+        reslew_time: ... when it stays so for this long [s], each step counted by how
+            many ``reslew`` it is off (one sample's fix carries the noise and the
+            photodiodes' own fading: 0.1 rad in scintillation at half the FEC range;
+            a kick's estimate left behind is off by more at once).
+        fit_fixes: how many of the last fixes the LED's direction and turn are fitted
+            to while acquiring (a straight line in time, by least squares).
     """
 
     def __init__(self, estimator, axes, slew, peak: float, reference: int, Te: float,
                  seen_level: float = 0.05, dark_level: float = 0.02,
                  loss_time: float = 0.05, patience: float = 0.5,
-                 arrive_tol: float = 0.005, arrive_rate: float = 0.3, reslew: float = 0.1):
+                 arrive_tol: float = 0.005, arrive_rate: float = 0.3, reslew: float = 0.1,
+                 reslew_time: float = 0.05, fit_fixes: int = 8):
         self.estimator, self.axes, self.slew = estimator, list(axes), slew
         self.peak, self.reference, self.Te = float(peak), int(reference), Te
         self.seen = seen_level * self.peak
@@ -67,16 +76,20 @@ class HeadSupervisor:
         self.loss_steps = max(1, int(round(loss_time / Te)))
         self.patience_steps = int(round(patience / Te))
         self.arrive_tol, self.arrive_rate, self.reslew = arrive_tol, arrive_rate, reslew
+        self.reslew_steps = max(1, int(round(reslew_time / Te)))
+        self._off_steps = 0.0  # successive tracked steps off, each in reslew's
         self.spiral = SpiralScan(Te)
         self.mode = "acquiring"
         self.target: np.ndarray | None = None  # encoder angles where the LED was seen
         self._dark_steps = 0
+        self._blind_steps = 0  # successive acquiring steps without a fix
         self._waited = 0
         self._std: np.ndarray | None = None
         self._updated = False  # the estimator was updated this step
         self._q = np.zeros(2)  # the step's encoder angles
-        self._fixed = False  # the last step's target is a fix
-        self._turn: np.ndarray | None = None  # d(target)/dt from successive fixes [rad/s]
+        self._k = 0  # the step's count
+        self._seen: deque = deque(maxlen=fit_fixes)  # (step, target) of the last fixes
+        self._turn: np.ndarray | None = None  # d(target)/dt from the fixes [rad/s]
 
     #: The powers reach the estimator as they are (the quad's ratios need no gain).
     gain_ratio = 1.0
@@ -114,7 +127,7 @@ class HeadSupervisor:
     # -- the step ----------------------------------------------------------------------
 
     def step(self, t: float, y: np.ndarray, q, qdot) -> Decision:
-        fixed, self._fixed, self._updated = self._fixed, False, False
+        self._updated, self._k = False, self._k + 1
         y = np.asarray(y, dtype=float)
         q, qdot = np.asarray(q, dtype=float), np.asarray(qdot, dtype=float)
         self._q = q
@@ -122,11 +135,12 @@ class HeadSupervisor:
             return self._track(y, q, qdot)
         fix = self._fix(y)
         if fix is not None:
-            target = q + to_encoder(fix, q)
-            if fixed:  # the line of sight's turn in the encoder's terms, smoothed
-                rate = (target - self.target) / self.Te
-                self._turn = rate if self._turn is None else 0.5 * (self._turn + rate)
-            self.target, self._fixed = target, True
+            self._blind_steps = 0
+            # The LED's direction in the encoder's terms, and its turn, fitted to the
+            # last fixes (one fix carries the noise and the fading: docs/two_axes.md)
+            self._seen.append((self._k, q + to_encoder(fix, q)))
+            self.target, self._turn = self._fitted()
+            fix = to_head(self.target - q, q)
             self.spiral.stop()
             if self.mode == "lost" and magnitude(fix) <= self.reslew:
                 return self._restart(fix, y, qdot, "reacquired")
@@ -136,6 +150,15 @@ class HeadSupervisor:
             # The beam is in view: the fix is the estimate, and the link stands.
             return Decision(np.r_[fix, -to_head(qdot, q)], False, True, self._slew(q, qdot),
                             reason="acquiring")
+        if self.mode == "acquiring" and self.target is not None and \
+                self._blind_steps + 1 < self.loss_steps:
+            # A sample without a fix (a fade, the noise breaking the pair's agreement)
+            # while the slew runs: the slew goes on to the last fix; no fix for
+            # loss_time, and the link is lost.
+            self._blind_steps += 1
+            return Decision(self._carried(q, qdot), False, True, self._slew(q, qdot),
+                            reason="acquiring")
+        self._blind_steps = 0
         xhat = self._update(y)
         if self.target is None:  # nothing seen yet: scan around where the head looks
             if not self.spiral.active:
@@ -170,9 +193,13 @@ class HeadSupervisor:
             fix = self._fix(y)
             # Far off the boresight (a kick), or far from what the powers say (an
             # estimate left behind): the fix takes over, and the slew.
-            if fix is not None and (magnitude(angles) > self.reslew
-                                    or magnitude(fix - angles) > self.reslew):
-                self.mode = "acquiring"
+            # Each step off adds how far off it is, in reslew's: five steps just off
+            # (a noisy fix) or one far off (a kick: 0.5 rad within 30 ms) trip it.
+            off = 0.0 if fix is None else max(magnitude(angles), magnitude(fix - angles))
+            self._off_steps = self._off_steps + off / self.reslew if off > self.reslew \
+                else 0.0
+            if self._off_steps >= self.reslew_steps:
+                self.mode, self._off_steps = "acquiring", 0.0
                 return self.step(0.0, y, q, qdot)
             return Decision(xhat, False)
         self._dark_steps += 1
@@ -182,6 +209,18 @@ class HeadSupervisor:
         return Decision(xhat, True, True, self._slew(q, qdot), reason="dark",
                         held=self._carried(q, qdot), held_std=self._std)
 
+    def _fitted(self) -> tuple[np.ndarray, np.ndarray | None]:
+        """The LED's encoder angles now and their rate [rad/s] (None from one fix): the
+        least-squares line through the last fixes' targets."""
+        if len(self._seen) == 1:
+            return self._seen[0][1], None
+        k = np.array([s[0] for s in self._seen], dtype=float)
+        targets = np.array([s[1] for s in self._seen])
+        k -= k.mean()
+        mean = targets.mean(axis=0)
+        slope = (k @ (targets - mean)) / (k @ k)
+        return mean + slope * k[-1], slope / self.Te
+
     def _restart(self, fix: np.ndarray, y: np.ndarray, qdot: np.ndarray,
                  reason: str) -> Decision:
         """Restart the estimator at the fix, its rates the line of sight's turn (seen
@@ -189,6 +228,7 @@ class HeadSupervisor:
         turn = 0.0 if self._turn is None else self._turn
         self.estimator.reset(np.r_[fix, to_head(turn - qdot, self._q)])
         self.mode, self._dark_steps, self._turn = "tracking", 0, None
+        self._seen.clear()
         return Decision(self._update(y), False, reseeded=True, reason=reason)
 
     def predict(self, u) -> None:

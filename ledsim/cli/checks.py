@@ -105,3 +105,21 @@ def _warn_out_of_plane(cfg) -> None:
                 f"(--transmitter-depth {cfg.transmitter_depth:g} m, --depth {cfg.depth:g} m, "
                 f"{cfg.distance:g} m apart), which the one-axis gimbal cannot turn to: "
                 f"{loss:.2f} dB of pointing loss however well it aims{verdict}")
+
+
+def _say_head(cfg, args) -> None:
+    """One line when a physical-link run whose command line names no head runs the yaw
+    gimbal, the pan-tilt default's exception (:func:`~ledsim.loop.registry.yaw_only`);
+    a checkpoint's own error comes first."""
+    from ledsim.loop.build.estimation import check_checkpoint
+    from ledsim.loop.registry import TWO_AXIS_ESTIMATORS, yaw_only
+
+    if getattr(args, "gimbal", None) is not None or getattr(args, "receiver", None) \
+            is not None or cfg.link == "paper" or cfg.world.head[0] != "yaw":
+        return
+    check_checkpoint(cfg)
+    e = cfg.estimation
+    why = yaw_only(e.estimator, e.checkpoint)
+    log.info(f"runs the yaw gimbal with its pair, not a physical link's pan-tilt default: "
+             f"{why} (--gimbal yaw says so; --gimbal pan-tilt takes "
+             f"{', '.join(TWO_AXIS_ESTIMATORS)})")

@@ -13,7 +13,7 @@ import time
 from pathlib import Path
 
 from ledsim.cli.budget_cmd import budget  # noqa: F401 (the budget command)
-from ledsim.cli.checks import _check_vehicle, _warn_saturated, _warn_unserved
+from ledsim.cli.checks import _check_vehicle, _say_head, _warn_saturated, _warn_unserved
 from ledsim.cli.export_cmd import export  # noqa: F401 (the export command)
 from ledsim.cli.groups import resolved_distance
 from ledsim.cli.replay_cmd import replay  # noqa: F401 (the replay command)
@@ -32,6 +32,7 @@ def _loop_config(args, **given):
 
     cfg = RunSpec(**{**spec_values(args), **given})
     cfg.validate()
+    _say_head(cfg, args)
     return cfg
 
 

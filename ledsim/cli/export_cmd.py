@@ -1,4 +1,5 @@
-"""``ledsim export``: one step of a fixed-gain KKL checkpoint as an ONNX graph."""
+"""``ledsim export``: one step of a fixed-gain KKL checkpoint as an ONNX graph, the maps
+of a gain-scheduled one, or the pan-tilt's pair (one step per axis)."""
 
 from __future__ import annotations
 
@@ -46,9 +47,16 @@ def export(args) -> int:
         raise LedsimError(f"checkpoint {str(path)!r} is for a {saved.get('class')!r} system: "
                           "ledsim exports observers of LEDLinkModel or GimbalSystem")
     obs = build_estimator("kkl", system, model=model, checkpoint=path)
-    if not hasattr(obs, "eigenvalues"):
-        raise LedsimError(f"checkpoint {str(path)!r} is a gain-scheduled KKL: ledsim exports "
-                          "fixed-gain observers (its gain schedule is not one ONNX step)")
+    if not hasattr(obs, "eigenvalues"):  # gain-scheduled: its maps, in one graph
+        from observer.kkl.export_maps import scheduled_maps_graph
+
+        graph = scheduled_maps_graph(obs)
+        atomic_write_bytes(out, lambda tmp: Path(tmp).write_bytes(graph.SerializeToString()))
+        log.info(f"wrote {out}: the maps of the gain-scheduled KKL {path} (q = {obs.q}); "
+                 "inputs x, z, w, s; outputs T(x; w), T_star(z; w, s)"
+                 f"{', T_star_locked' if obs.decoder_locked is not None else ''} "
+                 "(observer/kkl/export_maps.py; its schedule runs beside them)")
+        return 0
     graph = kkl_step_graph(obs, model.step_form())
     atomic_write_bytes(out, lambda tmp: Path(tmp).write_bytes(graph.SerializeToString()))
     log.info(f"wrote {out}: one step of {path} ({saved.get('class')}, q = {obs.q}); inputs "

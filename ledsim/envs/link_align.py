@@ -124,6 +124,8 @@ class LinkAlignEnv(gym.Env, EzPickle):
         for flag in ("imu", "station_keeping", "receiver_dome", "transmitter_aimed"):
             if flag in spec:
                 spec[flag] = bool(spec[flag])
+        if "gimbal" not in spec and "receiver" not in spec:
+            spec["gimbal"] = "yaw"  # v0 and v1 keep the paper's one axis on every link
         fixed = preset_named(spec.get("link", WorldPart.link)).ships_fixed_kkls
         # The env needs no estimator; its policy names its own (on a physical link the
         # shipped KKL does not serve: docs/link.md).

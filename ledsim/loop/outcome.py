@@ -2,7 +2,7 @@
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import asdict, dataclass
 from typing import NamedTuple
 
 import numpy as np
@@ -15,6 +15,7 @@ from ledsim.loop.run_metrics import RunMetrics, availability_mask, run_metrics, 
 from ledsim.loop.windows import WindowMetrics, horizontal_rms, window_metrics
 from ledsim.physics.layout import ReceiverLayout
 from ledsim.radiometry import optics
+from ledsim.radiometry.goodput import goodput
 from observer.pcrb import BoundError
 
 
@@ -203,6 +204,12 @@ def outcome(record: RunRecord, judging: Judging, constants, wall: float, keep_tr
                           steps=steps,
                           withheld=None if bound_inputs is None else
                           ~np.asarray(bound_inputs[2]).reshape(len(res.t), -1).all(axis=1))
+    if len(res.t):  # the data delivered, on the data detector
+        held = ~flags.any(axis=1) if supervised else None
+        delivered = goodput(lay.reference_power(res.power_clean), best, noise_model,
+                            constants.Te, bit_rate, held, lay.reference_power(res.distance))
+        for key, value in asdict(delivered).items():
+            setattr(metrics, key, value)
     nav = navigation
     if nav is not None and len(res.t):
         metrics.hull_error_rms = horizontal_rms(nav.hull, nav.station)

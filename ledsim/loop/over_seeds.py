@@ -58,3 +58,16 @@ def per_axis(outs: list[RunOutcome]) -> dict:
         return {}
     return {f"{name}_{k}": Stat.over(getattr(o.metrics, name)[k] for o in outs)
             for name in ("rmse", "rmse_steady") for k in AXIS_KEYS}
+
+
+#: What a run delivered, per seed (:class:`~ledsim.radiometry.goodput.Goodput`).
+DATA_KEYS = ("goodput_bits", "ideal_bits", "outages", "outage_s")
+
+
+def data_delivered(outs: list[RunOutcome]) -> dict:
+    """``goodput_bits``, ``ideal_bits`` [bit], ``outages`` and ``outage_s`` [s] over the
+    seeds, and ``range_m``, the range's [nearest, farthest] over every seed [m]."""
+    spans = [o.metrics.range_m for o in outs if o.metrics.range_m]
+    return {**{k: Stat.over(getattr(o.metrics, k) for o in outs) for k in DATA_KEYS},
+            "range_m": [min(s[0] for s in spans), max(s[1] for s in spans)] if spans
+            else None}

@@ -48,19 +48,49 @@ ACQUISITIONS = ("warm-up", "minimum-time")
 #: elevation: ``physics/layout.py:quad_layout``). Either flag alone sets the other.
 GIMBALS = {"yaw": "pair", "pan-tilt": "quad"}
 RECEIVERS = {receiver: gimbal for gimbal, receiver in GIMBALS.items()}
-#: The head when neither flag is given, every link alike (the pan-tilt default of a
-#: physical link waits for the two-axis supervisor: see docs/two_axes.md).
+#: The head when neither flag is given on the paper's bench (``--link paper``), whose
+#: photodiodes see no tilt: the paper's yaw gimbal with its pair.
 DEFAULT_GIMBAL = "yaw"
+#: The head when neither flag is given on a physical link: the pan-tilt with its quad,
+#: which points at an LED above or below the receiver (docs/two_axes.md), unless the
+#: run asks for what only the yaw gimbal runs (:func:`yaw_only`).
+PHYSICAL_GIMBAL = "pan-tilt"
 
 
-def head_of(gimbal: str | None, receiver: str | None) -> tuple[str, str]:
+def default_gimbal(link: str) -> str:
+    """The gimbal a run on ``link`` points when neither ``--gimbal`` nor ``--receiver``
+    is given: :data:`DEFAULT_GIMBAL` on the paper's bench, :data:`PHYSICAL_GIMBAL` on a
+    physical link."""
+    return DEFAULT_GIMBAL if link == "paper" else PHYSICAL_GIMBAL
+
+
+def head_of(gimbal: str | None, receiver: str | None,
+            link: str = "paper") -> tuple[str, str]:
     """(gimbal, receiver) as run from the flags given (None: not given): either one
-    given sets the other; neither, :data:`DEFAULT_GIMBAL` and its receiver."""
+    given sets the other; neither, :func:`default_gimbal` of ``link`` and its receiver."""
     if gimbal is not None:
         return gimbal, receiver or GIMBALS.get(gimbal, "pair")
     if receiver is not None:
         return RECEIVERS.get(receiver, DEFAULT_GIMBAL), receiver
-    return DEFAULT_GIMBAL, GIMBALS[DEFAULT_GIMBAL]
+    default = default_gimbal(link)
+    return default, GIMBALS[default]
+
+
+def yaw_only(estimator: str, checkpoint: str | None) -> str | None:
+    """Why a run with these choices needs the yaw gimbal (None: the pan-tilt takes
+    them): an estimator the pan-tilt head does not run, or a KKL checkpoint that is not
+    a pan-tilt pair's name (no NAME_azimuth and NAME_elevation beside it: a one-axis
+    KKL). A physical-link run that names no head and asks for one of them runs the yaw
+    gimbal (so every command of ledsim before the pan-tilt default still runs as it
+    did)."""
+    if estimator in LOOP_ESTIMATORS and estimator not in TWO_AXIS_ESTIMATORS:
+        return f"estimator {estimator} is one-axis"
+    if checkpoint:
+        from ledsim.files.resources import pair_paths
+
+        if not all(p.is_file() for p in pair_paths(checkpoint).values()):
+            return f"--checkpoint {checkpoint} is not a pan-tilt pair"
+    return None
 
 
 #: The estimators a pan-tilt run takes: the shipped KKL (one per axis, on its pair's

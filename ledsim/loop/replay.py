@@ -22,10 +22,10 @@ import numpy as np
 
 from ledsim.errors import LedsimError
 from ledsim.files.results import DictAccess
+from ledsim.loop.replay_onnx import ReplayError, replay_onnx
 from ledsim.loop.run_config import RunConfig
 from observer.exceptions import ObserverError
-from observer.kkl.fixed_gain import KKLObserver
-from observer.recording import CALLS, difference, replay_calls
+from observer.recording import CALLS, replay_calls
 
 #: What a replayable trace must hold: each array's dtype kinds (numpy's ``dtype.kind``)
 #: and number of dimensions.
@@ -33,10 +33,6 @@ NEEDED = {"config": ("U", 0), "call_kind": ("iu", 1), "call_step": ("iu", 1),
           "call_args": ("f", 2), "call_nargs": ("iu", 1), "call_out": ("f", 2)}
 _NPY_HEADERS = {(1, 0): np.lib.format.read_array_header_1_0,
                 (2, 0): np.lib.format.read_array_header_2_0}
-
-
-class ReplayError(LedsimError):
-    """The trace cannot be replayed (not a trace, no record, or another export)."""
 
 
 @dataclass
@@ -236,42 +232,3 @@ def replay(path: str | Path, onnx: str | Path | None = None) -> ReplayResult:
     estimates = int(np.sum(arrays["call_kind"] == CALLS.index(counted)))
     return ReplayResult(str(path), cfg.estimator, against, int(len(arrays["call_kind"])),
                         estimates, worst)
-
-
-def replay_onnx(est, arrays: dict[str, np.ndarray], onnx: str | Path) -> float:
-    """The recorded calls through the exported step of the fixed-gain KKL ``est``
-    (``ledsim export``): one step per ``predict``, on the step's last measurement; a
-    re-seed re-encodes z with ``est``'s own encoder. Returns the largest difference of
-    its estimates from the recorded ones."""
-    if not isinstance(est, KKLObserver):
-        raise ReplayError(f"an ONNX export is one fixed-gain KKL; this trace's estimator "
-                          f"({type(est).__name__}) is not one: replay it without --onnx")
-    try:
-        import onnxruntime as ort
-    except ImportError:
-        raise ReplayError("--onnx needs onnxruntime: pip install 'ledsim[onnx]'") from None
-    path = Path(onnx)
-    if not path.is_file():
-        raise ReplayError(f"ONNX file {str(path)!r} does not exist")
-    try:
-        sess = ort.InferenceSession(str(path), providers=["CPUExecutionProvider"])
-    except Exception as e:
-        raise ReplayError(f"ONNX file {str(path)!r} does not load: "
-                          f"{str(e).splitlines()[0]}") from None
-    q = sess.get_inputs()[0].shape[0]
-    if q != est.q:
-        raise ReplayError(f"ONNX file {str(path)!r} is a KKL with z of {q}, the trace's "
-                          f"has {est.q}: export the run's checkpoint")
-    z, y, out, worst = est.encode(est.initial_guess(None)), None, None, 0.0
-    for kind, args, n, rec in zip(arrays["call_kind"], arrays["call_args"],
-                                  arrays["call_nargs"], arrays["call_out"], strict=True):
-        name = CALLS[int(kind)]
-        if name == "reset":
-            # x0, then its covariance (which a KKL has no use for)
-            z = est.encode(est.initial_guess(args[:est.system.n_state] if n else None))
-        elif name == "update":
-            y, out = args[:n], rec
-        elif name == "predict":
-            x, z = sess.run(None, {"z": z, "y": y, "u": args[:1]})
-            worst = max(worst, difference(x, out))
-    return worst

@@ -18,6 +18,7 @@ from ledsim.loop.outcome import RunOutcome, Trace
 from ledsim.loop.over_seeds import (  # noqa: F401 (Stat and WINDOW_KEYS were here)
     WINDOW_KEYS,
     Stat,
+    data_delivered,
     per_axis,
     summarize_windows,
 )
@@ -67,7 +68,11 @@ class RunSummary(DictAccess):
     ``rmse_pointing`` [rad] (the RMS angle between the estimated and the true direction)
     with their ``rmse_steady_`` forms, beside ``rmse_x1``, the azimuth's, and the
     four-state bound's ``pcrb_steady_azimuth``, ``_elevation``, ``_pointing`` [rad] with
-    the steady RMSE over each (``rmse_over_pcrb_azimuth``, ...) (None on one axis)."""
+    the steady RMSE over each (``rmse_over_pcrb_azimuth``, ...) (None on one axis);
+    ``goodput_bits`` the data bits delivered through the link's FEC code while the link
+    was held, ``ideal_bits`` what the same path pointed perfectly delivers, ``outages``
+    and ``outage_s`` [s] the stretches delivering under half the code's rate, and
+    ``range_m`` the range's [nearest, farthest] [m] (:mod:`ledsim.radiometry.goodput`)."""
 
     scenario: str
     estimator: str
@@ -143,6 +148,11 @@ class RunSummary(DictAccess):
     rmse_over_pcrb_azimuth: float | None = None
     rmse_over_pcrb_elevation: float | None = None
     rmse_over_pcrb_pointing: float | None = None
+    goodput_bits: Stat | None = None
+    ideal_bits: Stat | None = None
+    outages: Stat | None = None
+    outage_s: Stat | None = None
+    range_m: list | None = None
 
 
 def summarize(cfg: RunConfig, outs: list[RunOutcome]) -> RunSummary:
@@ -199,7 +209,8 @@ def summarize(cfg: RunConfig, outs: list[RunOutcome]) -> RunSummary:
         loss_events=stat(lambda o: o.metrics.loss_events),
         false_loss_events=stat(lambda o: o.metrics.false_loss_events),
         reseeds=stat(lambda o: o.metrics.reseeds), spec=cfg.flat(), sea_depth=cfg.sea_depth,
-        gimbal=cfg.world.head[0], receiver=cfg.world.head[1], **per_axis(outs))
+        gimbal=cfg.world.head[0], receiver=cfg.world.head[1], **per_axis(outs),
+        **data_delivered(outs))
 
 
 #: The most seeds one job steps together (a batch): larger batches gain little more

@@ -16,6 +16,7 @@ from ledsim.loop.registry import (  # noqa: F401 (aliases: the choices where led
     OMEGA_MODELS,
     PHYSICS_SCENARIOS,
     peak_snr,
+    yaw_only,
 )
 from ledsim.loop.validation import (
     run_from_dict,
@@ -140,6 +141,12 @@ class RunSpec:
             own = changes.get(part, {})
             value = kind(**own) if given[part] is None else replace(given[part], **own)
             object.__setattr__(self, part, value)
+        w, e = self.world, self.estimation
+        if w.gimbal is None and w.receiver is None and w.link != "paper" and \
+                yaw_only(e.estimator, e.checkpoint):
+            # a physical link's default head is the pan-tilt, but for what only the yaw
+            # gimbal runs (every command before that default still runs as it did)
+            object.__setattr__(self, "world", replace(w, gimbal="yaw"))
 
     @classmethod
     def of(cls, world: WorldPart = WorldPart(), task: TaskPart = TaskPart(),  # noqa: B008

@@ -95,6 +95,11 @@ class RunMetrics(DictAccess):
         reseeds: times the supervisor restarted the estimator (re-seeded it from a fix
             of the beam or handed over after an acquisition, the run's first
             included) [-].
+        goodput_bits, ideal_bits, outages, outage_s, range_m: the data delivered
+            through the code while the link was held, what the same path pointed
+            perfectly delivers [bit], the outages after the first acquisition and their
+            length [s], and the range's [nearest, farthest] [m]
+            (:mod:`ledsim.radiometry.goodput`; None without a link budget).
     """
 
     rmse: dict
@@ -120,6 +125,11 @@ class RunMetrics(DictAccess):
     loss_events: int = 0
     false_loss_events: int = 0
     reseeds: int = 0
+    goodput_bits: float | None = None
+    ideal_bits: float | None = None
+    outages: int | None = None
+    outage_s: float | None = None
+    range_m: list | None = None
 
 
 def link_events(lost: np.ndarray, Te: float) -> list[list]:

@@ -22,7 +22,6 @@ from ledsim.experiment.estimators import LOOP_KKL_ESTIMATORS
 from ledsim.keyvalues import settings_of
 from ledsim.loop.registry import (
     ACQUISITIONS,
-    DEFAULT_GIMBAL,
     FILTER_DISTANCES,
     GIMBALS,
     LOOP_ESTIMATORS,
@@ -68,8 +67,8 @@ def validate_run(cfg) -> None:
                                    FILTER_DISTANCES),
                                   ("--acquisition", cfg.acquisition, ACQUISITIONS),
                                   ("--link", cfg.link, LINK_PRESETS),
-                                  ("--gimbal", cfg.gimbal or DEFAULT_GIMBAL, GIMBALS),
-                                  ("--receiver", cfg.receiver or "pair", RECEIVERS)):
+                                  ("--gimbal", cfg.world.head[0], GIMBALS),
+                                  ("--receiver", cfg.world.head[1], RECEIVERS)):
         if value not in registry:
             raise LedsimError(f"unknown {flag.lstrip('-')} {value!r}: choose one of "
                               f"{', '.join(registry)}")

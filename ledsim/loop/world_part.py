@@ -45,7 +45,9 @@ class WorldPart:
             (``--receiver-dome``).
         sea_depth: the sea's depth [m], where the seabed stands (None: below both ends).
         gimbal: the receiver's gimbal, ``yaw`` (the paper's one axis) or ``pan-tilt``
-            (azimuth and elevation) (None: the receiver's, or ``yaw``).
+            (azimuth and elevation) (None: the receiver's, or the link's: ``yaw`` on the
+            paper's bench, ``pan-tilt`` on a physical link, but ``yaw`` where the run
+            asks for what only it runs: :func:`~ledsim.loop.registry.yaw_only`).
         receiver: its photodiodes, ``pair`` (the paper's) or ``quad`` (a data detector
             on the boresight and four pointing photodiodes ``dphi`` off it in azimuth
             and elevation) (None: the gimbal's).
@@ -103,7 +105,7 @@ class WorldPart:
     @property
     def head(self) -> tuple[str, str]:
         """(gimbal, receiver) as run (:func:`~ledsim.loop.registry.head_of`)."""
-        return head_of(self.gimbal, self.receiver)
+        return head_of(self.gimbal, self.receiver, self.link)
 
     @property
     def two_axes(self) -> bool:

@@ -51,6 +51,33 @@ def add_motor(spec: mujoco.MjSpec, name: str, joint: str) -> None:
                       gear=[1, 0, 0, 0, 0, 0])
 
 
+def check_hinges(spec: mujoco.MjSpec, layout: ReceiverLayout,
+                 error: type[LedsimError]) -> None:
+    """A scene's hinges fit the layout: each of its axes the scene has is a hinge about
+    the axis's direction, and the gimbal carries no joint the layout does not turn (a
+    ``--scene`` with a tilt hinge under the yaw gimbal, or a pan hinge about x)."""
+    names = [a.name for a in layout.axes]
+    for axis in layout.axes:
+        joint = spec.joint(axis.joint)
+        if joint is None:
+            continue
+        if joint.type != mujoco.mjtJoint.mjJNT_HINGE:
+            raise error(f"the scene's joint {axis.joint!r} is a "
+                        f"{joint.type.name.removeprefix('mjJNT_').lower()} joint: the "
+                        f"{axis.name} axis needs a hinge")
+        turn = np.asarray(joint.axis, float)
+        if not np.allclose(turn / np.linalg.norm(turn), axis.direction, atol=1e-6):
+            raise error(f"the scene's hinge {axis.joint!r} turns about "
+                        f"{tuple(float(v) for v in turn)}, not the {axis.name} axis's "
+                        f"{tuple(axis.direction)}")
+    joints = {a.joint for a in layout.axes}
+    for joint in spec.body("gimbal").find_all(mujoco.mjtObj.mjOBJ_JOINT):
+        if joint.name not in joints:
+            raise error(f"the scene's gimbal has a joint {joint.name!r} that a head of "
+                        f"axes {', '.join(names)} does not turn (--gimbal pan-tilt turns "
+                        "'gimbal_hinge' and 'tilt_hinge'; --gimbal yaw 'gimbal_hinge')")
+
+
 def build_head(spec: mujoco.MjSpec, layout: ReceiverLayout, damping: float,
                error: type[LedsimError]) -> list:
     """Turn each photodiode's normal to its offsets, and build the axes the scene lacks
@@ -59,6 +86,7 @@ def build_head(spec: mujoco.MjSpec, layout: ReceiverLayout, damping: float,
     if spec.joint(layout.axes[0].joint) is None:
         raise error(f"the scene has no joint named {layout.axes[0].joint!r} for the "
                     f"first axis ({layout.axes[0].name})")
+    check_hinges(spec, layout, error)
     first_hinge = spec.joint(layout.axes[0].joint)
     for axis in layout.axes[1:]:
         if spec.joint(axis.joint) is not None:

@@ -35,7 +35,7 @@ from __future__ import annotations
 
 import math
 from collections import deque
-from dataclasses import dataclass
+from dataclasses import dataclass, fields
 
 import numpy as np
 
@@ -80,6 +80,22 @@ class NavigationReading:
     magnetometer: np.ndarray | None = None
     fix_time: float | None = None
     fix_std: float | None = None
+
+    @classmethod
+    def stacked(cls, readings) -> NavigationReading:
+        """The readings of several sets of vehicles (each taken for its rows), as one
+        taken for all their rows (a field none has stays None; one some lack, NaN)."""
+        out = {}
+        for f in fields(cls):
+            values = [getattr(r, f.name) for r in readings]
+            present = [v for v in values if v is not None]
+            if not present:
+                out[f.name] = None
+                continue
+            blank = np.full_like(np.asarray(present[0], dtype=float), np.nan)
+            out[f.name] = np.concatenate([blank if v is None else np.asarray(v)
+                                          for v in values])
+        return cls(**out)
 
     def row(self, i: int) -> NavigationReading:
         """Vehicle ``i``'s reading of one taken for N vehicles (NaN fixes as None)."""
