@@ -31,22 +31,28 @@ def _check_vehicle(cfg) -> None:
 
 
 def _warn_saturated(cfg) -> None:
-    """Say so when the receiver saturates at the run's distance: its peak power reaches
-    the full scale of its digitiser, so the aligned samples clip there, and the
-    estimators, whose model has no clipping, read a clipped pair of powers as an angle
-    off the peak (a biased phi)."""
-    from ledsim.loop.build.estimation import saturates
+    """Say so when the receiver saturates anywhere along the run's path (at its
+    distance, or where the transmitter's drift brings it): its peak power reaches the
+    full scale of its digitiser, so the aligned samples clip there, and the estimators,
+    whose model has no clipping, read a clipped pair of powers as an angle off the peak
+    (a biased phi)."""
+    from ledsim.loop.path_range import saturation_onset
     from ledsim.radiometry.optics import peak_power
 
-    if saturates(cfg):
-        c = cfg.world_config().constants
-        peak, digitiser = peak_power(c), c.measurement_noise(cfg.noise_scale).digitiser
-        log.warning(f"the receiver saturates at --distance {cfg.distance:g}: its peak power "
-                    f"{peak:.3g} W reaches its digitiser's full scale of "
-                    f"{digitiser.full_scale:.3g} W, so aligned samples clip and the "
-                    "estimators (whose model does not clip) misread phi: expect a biased "
-                    "or lost estimate; a longer distance or murkier water keeps it in "
-                    "range (results.json: receiver_saturates true)")
+    onset = saturation_onset(cfg)
+    if onset is None:
+        return
+    distance, t = onset
+    c = cfg.world_config(distance=distance if t else None).constants
+    peak, digitiser = peak_power(c), c.measurement_noise(cfg.noise_scale).digitiser
+    where = f"at --distance {cfg.distance:g}" if t == 0.0 else \
+        f"from {distance:.1f} m on, {t:.1f} s into the run (the transmitter's drift)"
+    log.warning(f"the receiver saturates {where}: its peak power "
+                f"{peak:.3g} W reaches its digitiser's full scale of "
+                f"{digitiser.full_scale:.3g} W, so aligned samples clip and the "
+                "estimators (whose model does not clip) misread phi: expect a biased "
+                "or lost estimate; a longer distance or murkier water keeps it in "
+                "range (results.json: receiver_saturates true)")
 
 
 def _warn_unserved(cfg) -> None:

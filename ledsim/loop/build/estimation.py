@@ -23,7 +23,7 @@ from ledsim.loop.run_config import RunConfig
 from ledsim.physics.gimbal_system import GimbalSystem, IdentifiedGimbalModel
 from ledsim.physics.scene import WorldConfig
 from ledsim.radiometry.link_presets import kkl_reference_constants, preset_named
-from ledsim.radiometry.optics import peak_power, receiver_saturates
+from ledsim.radiometry.optics import peak_power
 from observer.kkl import checkpoint as ckpt
 from observer.kkl.bank import ObserverBank
 from observer.noise import MeasurementNoise
@@ -56,9 +56,12 @@ def served(cfg: RunConfig) -> bool:
 
 
 def saturates(cfg: RunConfig) -> bool:
-    """Whether the run's receiver saturates at its distance
-    (:func:`~ledsim.radiometry.optics.receiver_saturates`)."""
-    return receiver_saturates(cfg.world_config().constants, cfg.noise_scale)
+    """Whether the run's receiver saturates anywhere along its path: at its distance
+    or where the transmitter's drift brings it
+    (:func:`~ledsim.loop.path_range.saturation_onset`)."""
+    from ledsim.loop.path_range import saturation_onset
+
+    return saturation_onset(cfg) is not None
 
 
 #: On a physical link, the scheduled KKL holds its gain while the motor works against

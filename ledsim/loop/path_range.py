@@ -1,0 +1,55 @@
+"""The range a run's path spans, and where along it the receiver first saturates.
+
+The range is the configured distance changed by the transmitter's drift along the link
+(``transmitter:drift=V,drift_until=T``): d(t) = d + sum of V min(t, T). A run whose
+range closes can reach the distance at which the receiver's peak power fills its
+digitiser's full scale from a start well outside it (bluecomm-200 in coastal water
+clips from 9.0 m on, 42 s into a closing from 30 m at 0.5 m/s).
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from ledsim.physics.disturbances import TransmitterMotion, parse_disturbance
+from ledsim.radiometry.link_presets import link_constants
+from ledsim.radiometry.optics import receiver_saturates
+
+#: The path's range is looked at every this many seconds [s].
+PATH_STEP = 0.1
+
+
+def range_path(cfg) -> tuple[np.ndarray, np.ndarray]:
+    """(times [s], ranges [m]) of the run ``cfg``'s path, every :data:`PATH_STEP`."""
+    t = np.arange(0.0, cfg.run_seconds + PATH_STEP / 2, PATH_STEP)
+    d = np.full(t.shape, float(cfg.distance))
+    for spec in cfg.disturbances:
+        dist = parse_disturbance(spec)
+        if isinstance(dist, TransmitterMotion) and dist.drift:
+            d += dist.drift * np.minimum(t, dist.drift_until)
+    return t, d
+
+
+def _saturates_at(cfg, distance: float) -> bool:
+    c = link_constants(cfg.link, distance, cfg.water, cfg.attenuation,
+                       lens_field=cfg.world.lens_field)
+    return receiver_saturates(c, cfg.noise_scale)
+
+
+def saturation_onset(cfg) -> tuple[float, float] | None:
+    """(range [m], time [s]) at which the run's receiver first saturates along its path
+    (:func:`~ledsim.radiometry.optics.receiver_saturates` at that range), or None when
+    it never does. The receiver's peak power falls with the range, so the range where
+    it starts is found by bisection between the path's nearest and farthest."""
+    t, d = range_path(cfg)
+    near = int(np.argmin(d))
+    if not _saturates_at(cfg, float(d[near])):
+        return None
+    if _saturates_at(cfg, float(d[0])):
+        return float(d[0]), 0.0
+    lo, hi = float(d[near]), float(d[0])  # saturates at lo, not at hi
+    for _ in range(40):
+        mid = 0.5 * (lo + hi)
+        lo, hi = (mid, hi) if _saturates_at(cfg, mid) else (lo, mid)
+    first = int(np.argmax(d <= lo))
+    return lo, float(t[first])
