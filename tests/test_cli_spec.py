@@ -41,16 +41,18 @@ def test_a_spec_goes_to_a_command_line_and_back(spec):
 
 
 def test_a_sweeps_rows_give_every_spec_name():
-    from ledsim.loop.sweep import COLUMNS, SPEC_COLUMNS
+    from ledsim.loop.sweep import COLUMNS, DATA_COLUMNS, SPEC_COLUMNS
 
     grid = {"disturbances": "disturbance", "seeds": "seed", "workers": None}
     assert {grid.get(n, n) for n in FLAT} - {None} <= set(COLUMNS)
-    assert COLUMNS[-len(SPEC_COLUMNS):] == SPEC_COLUMNS  # appended: old columns keep places
+    # appended: old columns keep places (the data delivered after the spec)
+    assert COLUMNS[-len(DATA_COLUMNS):] == DATA_COLUMNS
+    assert COLUMNS[-len(SPEC_COLUMNS) - len(DATA_COLUMNS):-len(DATA_COLUMNS)] == SPEC_COLUMNS
 
 
 def test_a_cell_of_an_older_sweep_leaves_the_new_columns_blank():
-    from ledsim.loop.sweep import COLUMNS, SPEC_COLUMNS, _csv
+    from ledsim.loop.sweep import COLUMNS, DATA_COLUMNS, SPEC_COLUMNS, _csv
 
-    row = {k: 1.0 for k in COLUMNS if k not in SPEC_COLUMNS}
+    row = {k: 1.0 for k in COLUMNS if k not in SPEC_COLUMNS + DATA_COLUMNS}
     text = _csv([row], COLUMNS)
-    assert text.splitlines()[1].endswith("," * len(SPEC_COLUMNS))
+    assert text.splitlines()[1].endswith("," * (len(SPEC_COLUMNS) + len(DATA_COLUMNS)))

@@ -43,7 +43,9 @@ import math
 
 import numpy as np
 
+from ledsim.agent.guidance import Mission, PathReference
 from ledsim.agent.keeping import StationKeeper, StationKeeping
+from ledsim.agent.vehicle_row import VehicleRow, target_of
 from ledsim.constants import GRAVITY, NavigationNoise
 from ledsim.physics.batch import cross3
 from ledsim.physics.nav_sensors import GRAVITY_REACTION, NavigationReading, NavigationSensor
@@ -89,14 +91,15 @@ class Vehicle(Rows):
 
     ROW_ARRAYS = ("l_gimbal", "led", "_bearing0", "_surface", "_home_position",
                   "_home_heading")
-    ROW_LISTS = ("worlds",)
+    ROW_LISTS = ("worlds", "paths")
     PARTS = ("sensor", "ins", "keeper", "sight")
 
     def __init__(self, world: LinkWorld, Te: float, seed: int, distance: float,
                  station_keeping: bool = True, noise: NavigationNoise | None = None,
                  gains: StationKeeping | None = None, rate_time: float = 0.05,
                  bearing_time: float = 2.0, reanchor_rate: float = 3.0,
-                 reanchor_time: float = 1.0, reanchor_bearing_time: float = 0.2):
+                 reanchor_time: float = 1.0, reanchor_bearing_time: float = 0.2,
+                 mission: Mission | None = None):
         self.single, self.n = True, 1
         self.worlds, self.Te, self.distance = [world], Te, distance
         self.sensor = NavigationSensor(world, Te, seed, noise)
@@ -117,6 +120,9 @@ class Vehicle(Rows):
         self._home_heading = np.array([home[1]])
         self.keeper = StationKeeper(world, Te, gains, n, home, surface) \
             if self.station_keeping else None
+        # A mission's target from the start pose (agent/guidance.py; None: a station)
+        self.paths = [None if mission is None or self.keeper is None else
+                      PathReference(mission, home[0], home[1])]
         self._reading: NavigationReading | None = None
         # The LOS rate's noise [rad/s] from the sensors' figures: the DVL's through the
         # navigation's velocity (about a ping's noise over the pings of 0.3 s), the
@@ -174,6 +180,12 @@ class Vehicle(Rows):
         return self._home_position[0], float(self._home_heading[0])
 
     @property
+    def target(self) -> np.ndarray:
+        """Where the vehicle is told to be: its keeper's home, x, y and the depth
+        sensor's zero's height [m] (3,) (a mission's target; the station otherwise)."""
+        return target_of(self, 0)
+
+    @property
     def navigation(self) -> InsState:
         """The navigation's estimate (:class:`~observer.navigation.ins.InsState`)."""
         return self.ins.state
@@ -224,6 +236,8 @@ class Vehicle(Rows):
             ins.position_rows(rows, r.position_fix[rows], r.fix_std[rows],
                               now - r.fix_time[rows], FIX_GATE)
         nav = ins.states
+        if self.paths[0] is not None:
+            self._follow(t, nav)
         omega = r.gyro - nav.gyro_bias
         # a: the mean acceleration over the step, hull frame [m/s^2]: the velocity
         # increment less its bias and gravity's reaction.
@@ -235,6 +249,17 @@ class Vehicle(Rows):
         self.sight.update_rows(v_g, r.encoder, omega[:, 2], nav_bearing)
         if self.keeper is not None:
             self.keeper.act_rows(nav, ins.Ps, velocity, omega, a)
+
+    def _follow(self, t, nav: InsState) -> None:
+        """Move each keeper's home to its mission's target at ``t`` [s], and tell the
+        line of sight the range the navigation puts the LED at."""
+        k = self.keeper
+        for i, path in enumerate(self.paths):
+            position, velocity, heading = path.at(float(t[i] if np.ndim(t) else t))
+            k.home_position[i], k.home_velocity[i], k.home_heading[i] = \
+                position, velocity, heading
+        hinge = nav.position[:, :2] + _mv(nav.attitude, self.l_gimbal)[:, :2]
+        self.sight.ranges = np.hypot(*(self.led - hinge).T)
 
     def _led_bearing(self, nav: InsState) -> np.ndarray:
         """The LED's bearing from the gimbal's hinge in the hull's frame [rad] by the
@@ -250,44 +275,3 @@ class Vehicle(Rows):
         dy = ledy - (py + s * lx + c * ly)
         bearing = o.remainder(o.atan2(dy, dx) - heading, 2 * math.pi)
         return np.array([bearing]) if n == 1 else bearing
-
-
-class VehicleRow:
-    """Vehicle ``i`` of a stacked :class:`Vehicle`: what one run reads of it (its
-    navigation, line of sight, station)."""
-
-    def __init__(self, vehicles: Vehicle, i: int):
-        self.vehicles, self.i = vehicles, i
-
-    @property
-    def station_keeping(self) -> bool:
-        return self.vehicles.station_keeping
-
-    @property
-    def surface(self) -> float:
-        return float(self.vehicles._surface[self.i])
-
-    @property
-    def home(self) -> tuple[np.ndarray, float]:
-        v = self.vehicles
-        return v._home_position[self.i], float(v._home_heading[self.i])
-
-    @property
-    def navigation(self) -> InsState:
-        s, i = self.vehicles.ins.states, self.i
-        return InsState(s.position[i], s.velocity[i], s.attitude[i], s.gyro_bias[i],
-                        s.accel_bias[i])
-
-    @property
-    def navigated_position(self) -> np.ndarray:
-        """The navigation's position [m] (:attr:`navigation`'s, without building it)."""
-        return self.vehicles.ins.states.position[self.i]
-
-    @property
-    def los(self) -> LineOfSight:
-        return self.vehicles.sight.los_of(self.i)
-
-    @property
-    def reading(self) -> NavigationReading | None:
-        r = self.vehicles._reading
-        return None if r is None else r.row(self.i)

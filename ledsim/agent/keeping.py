@@ -99,7 +99,7 @@ class StationKeeper(Rows):
     """
 
     ROW_ARRAYS = ("thrust", "_omega", "k", "home_position", "home_heading", "surface",
-                  "_mass")
+                  "_mass", "home_velocity")
     ROW_LISTS = ("worlds",)
 
     def __init__(self, world: LinkWorld, Te: float, gains: StationKeeping,
@@ -108,6 +108,8 @@ class StationKeeper(Rows):
         self.worlds, self.Te, self.gains = [world], Te, gains
         self.home_position = np.asarray(home[0], dtype=float)[None].copy()
         self.home_heading = np.array([float(home[1])])
+        # The home's velocity, world frame [m/s] (a mission's moving target; 0: a station)
+        self.home_velocity = np.zeros((1, 2))
         self.surface = np.array([float(surface)])
         mass = world.hull_inertia()  # surge, sway, heave [kg]; pitch, yaw [kg m^2]
         self._mass = mass[None]  # the gimbal's pose at the start changes it a little
@@ -164,7 +166,7 @@ class StationKeeper(Rows):
         cols = columns(n, att[:, 1, 0], att[:, 0, 0], att[:, 2, 0], pos[:, 0], pos[:, 1],
                        pos[:, 2], self.home_position[:, 0], self.home_position[:, 1],
                        self.home_heading, self.surface, *d.T, *velocity.T, omega[:, 1],
-                       omega[:, 2])
+                       omega[:, 2], self.home_velocity[:, 0], self.home_velocity[:, 1])
         out = _pd_terms(ops(n), self.gains, self._kp, self._kd, PDInputs(*cols))
         return np.array([out]) if n == 1 else np.array(out).T
 
@@ -178,7 +180,8 @@ class PDInputs(NamedTuple):
     navigated attitude's entries R[1,0], R[0,0], R[2,0] and position [m]; home (x, y
     [m], heading [rad], depth of the surface [m]); the navigation's variances of x, y,
     z [m^2], pitch, yaw [rad^2], vx, vy, vz [m^2/s^2]; the hull-frame velocity [m/s]
-    and the pitch and yaw rates [rad/s]."""
+    and the pitch and yaw rates [rad/s]; the home's velocity, world frame (x, y [m/s]:
+    a mission's target; 0 at a station)."""
 
     r10: object
     r00: object
@@ -203,6 +206,8 @@ class PDInputs(NamedTuple):
     uz: object
     wy: object
     wz: object
+    hvx: object = 0.0
+    hvy: object = 0.0
 
 
 def _pd_terms(o, g: StationKeeping, kp, kd, x: PDInputs):
@@ -211,14 +216,15 @@ def _pd_terms(o, g: StationKeeping, kp, kd, x: PDInputs):
     velocity shrunk by its soft deadband (the part beyond ``deadband`` of the
     navigation's own standard deviations: ``max(0, 1 - (k^2 var / e^2)^2)``)."""
     (r10, r00, r20, px, py, pz, hx, hy, heading0, surface, vx_, vy_, vz_, vpitch, vyaw,
-     vvx, vvy, vvz, ux, uy, uz, wy, wz) = x
+     vvx, vvy, vvz, ux, uy, uz, wy, wz, hvx, hvy) = x
     heading = o.atan2(r10, r00)
     pitch = o.asin(o.maximum(-1.0, o.minimum(1.0, -r20)))
     c, s = o.cos(heading), o.sin(heading)
     dx, dy = px - hx, py - hy
     err = [c * dx + s * dy, -s * dx + c * dy, pz - surface, pitch,
            o.remainder(heading - heading0, 2 * math.pi)]
-    rate = [ux, uy, uz, wy, wz]
+    # the velocity relative to the home's, in the hull's frame (0 at a station)
+    rate = [ux - (c * hvx + s * hvy), uy - (-s * hvx + c * hvy), uz, wy, wz]
     k, kv = g.deadband, g.velocity_deadband
     e2 = [o.square(e) for e in err]
     v2 = [o.square(v) for v in rate[:3]]

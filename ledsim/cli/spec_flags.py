@@ -128,6 +128,9 @@ def flags() -> dict[str, Flag]:
                                "the lens gathers the light of a larger aperture)",
                                number(1.0, 29.9, "deg"), metavar="F"),
         "scene": Flag("MJCF scene file (default: the shipped led_link.xml)"),
+        "mission": Flag("a JSON or TOML file of waypoints (x ahead, y left of the start "
+                        "[m], speed [m/s]) the vehicle flies, then holds the last "
+                        "(docs/missions.md)", metavar="FILE"),
         "integrator": Flag("MuJoCo integrator (docs/physics.md compares them)",
                            choices=INTEGRATORS),
         "torque_limit": Flag("[N m]", TORQUE_LIMIT),

@@ -77,6 +77,10 @@ class LoopRun:
         self.navigated = np.full((steps, 3), np.nan)
         v = self.vehicle
         self.station = None if v is None else np.r_[v.home[0], v.surface]
+        # a mission's station moves: its target each step (the hull's error is from it)
+        self.moving = v is not None and v.paths[0] is not None
+        if self.moving:
+            self.station = np.tile(self.station, (steps, 1))
         self.spent = 0.0  # s in the control step
 
     def control(self, k: int, t: float, reading: SensorReading | None = None) -> float:
@@ -97,6 +101,8 @@ class LoopRun:
             self.medium[k] = self.world.light_gain[self.world.config.constants.layout.reference]
         if self.vehicle is not None:
             self.navigated[k] = self.vehicle.navigated_position
+            if self.moving:
+                self.station[k] = self.vehicle.target
         t0 = time.perf_counter()
         los = None
         if self.aided:  # a pan-tilt head takes the gyro's three rates (agent/pan_tilt.py)

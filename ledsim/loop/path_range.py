@@ -1,7 +1,8 @@
 """The range a run's path spans, and where along it the receiver first saturates.
 
-The range is the configured distance changed by the transmitter's drift along the link
-(``transmitter:drift=V,drift_until=T``): d(t) = d + sum of V min(t, T). A run whose
+The range is the configured distance changed by the vehicle's mission (``--mission``)
+and the transmitter's drift along the link (``transmitter:drift=V,drift_until=T``):
+d(t) = d + sum of V min(t, T). A run whose
 range closes can reach the distance at which the receiver's peak power fills its
 digitiser's full scale from a start well outside it (bluecomm-200 in coastal water
 clips from 9.0 m on, 42 s into a closing from 30 m at 0.5 m/s).
@@ -20,9 +21,17 @@ PATH_STEP = 0.1
 
 
 def range_path(cfg) -> tuple[np.ndarray, np.ndarray]:
-    """(times [s], ranges [m]) of the run ``cfg``'s path, every :data:`PATH_STEP`."""
+    """(times [s], ranges [m]) of the run ``cfg``'s path, every :data:`PATH_STEP`: the
+    mission's target (in the start frame, the LED ``distance`` ahead, as seen from the
+    gimbal's hinge when the hull heads at it) and the transmitter's drift."""
     t = np.arange(0.0, cfg.run_seconds + PATH_STEP / 2, PATH_STEP)
     d = np.full(t.shape, float(cfg.distance))
+    if cfg.mission is not None:
+        from ledsim.agent.guidance import Mission, PathReference
+
+        where = PathReference(Mission.from_file(cfg.mission), (0.0, 0.0), 0.0).positions(t)
+        rise = 0.0 if cfg.transmitter_depth is None else cfg.depth - cfg.transmitter_depth
+        d = np.sqrt((cfg.distance - where[:, 0]) ** 2 + where[:, 1] ** 2 + rise ** 2)
     for spec in cfg.disturbances:
         dist = parse_disturbance(spec)
         if isinstance(dist, TransmitterMotion) and dist.drift:

@@ -99,6 +99,9 @@ class ExecutionPart:
     window: float | None = None
 
 
+#: How long a mission's run holds its last waypoint when no ``seconds`` is given [s].
+MISSION_HOLD = 5.0
+
 PARTS = {"world": WorldPart, "task": TaskPart, "estimation": EstimatorPart,
          "execution": ExecutionPart}
 
@@ -211,7 +214,16 @@ class RunSpec:
 
     @property
     def run_seconds(self) -> float:
-        return self.scenario_spec.seconds if self.seconds is None else self.seconds
+        """The run's length [s]: ``seconds``, or the scenario's; with a mission, long
+        enough to fly it and hold the last waypoint :data:`MISSION_HOLD`."""
+        if self.seconds is not None:
+            return self.seconds
+        if self.mission is not None:
+            from ledsim.agent.guidance import Mission
+
+            return max(self.scenario_spec.seconds,
+                       Mission.from_file(self.mission).duration + MISSION_HOLD)
+        return self.scenario_spec.seconds
 
     def world_config(self, distance: float | None = None) -> WorldConfig:
         """The MuJoCo world of the run (at ``distance`` [m] instead, when given)."""

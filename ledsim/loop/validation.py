@@ -20,6 +20,7 @@ from ledsim.constants import (
 from ledsim.errors import LedsimError, check_ranges
 from ledsim.experiment.estimators import LOOP_KKL_ESTIMATORS
 from ledsim.keyvalues import settings_of
+from ledsim.loop.head_validation import _check_lens, _check_two_axes
 from ledsim.loop.registry import (
     ACQUISITIONS,
     FILTER_DISTANCES,
@@ -30,7 +31,6 @@ from ledsim.loop.registry import (
     OMEGA_MODELS,
     PHYSICS_SCENARIOS,
     RECEIVERS,
-    TWO_AXIS_ESTIMATORS,
     peak_snr,
 )
 from ledsim.physics.disturbances import check_sea, check_timing, parse_disturbance
@@ -165,6 +165,8 @@ def validate_run(cfg) -> None:
                           f"{cfg.run_seconds:g}] s")
     navigation_noise(cfg.imu_noise)
     keeping_gains(cfg.station_keeping_gains)
+    if cfg.mission is not None:
+        _check_mission(cfg)
     world = cfg.world_config()
     snr = peak_snr(world.constants, cfg.noise_scale)
     if not snr >= MIN_RUN_PEAK_SNR:
@@ -175,46 +177,6 @@ def validate_run(cfg) -> None:
                           f"under {MIN_RUN_PEAK_SNR:g}; a shorter --distance, clearer "
                           "water or a lower --noise-scale")
     check_world(world)
-
-
-def _check_lens(cfg) -> None:
-    """A lens fits a physical receiver, narrower than its bare field; the yaw gimbal's
-    shipped KKLs were trained for the bare detector."""
-    check_ranges([("--lens-field-deg", cfg.lens_field_deg, 1.0 <= cfg.lens_field_deg < 30.0,
-                   "in [1, 30) deg: narrower than the bare detector's 30 deg")])
-    if cfg.link == "paper":
-        raise LedsimError("--lens-field-deg is not allowed with --link paper: the bench's "
-                          "photodiodes have no lens (choose a physical --link)")
-    if not cfg.world.two_axes and cfg.estimator in KKL_ON_BENCH and not cfg.checkpoint:
-        raise LedsimError(f"estimator {cfg.estimator!r} is not allowed with "
-                          "--lens-field-deg on the yaw gimbal: its shipped KKLs were "
-                          "trained for the bare 30 deg detector (use --gimbal pan-tilt, or "
-                          "ekf, ukf, pf or oracle)")
-
-
-def _check_two_axes(cfg) -> None:
-    """What a pan-tilt run does not take (yet), refused in one line."""
-    if cfg.link == "paper":
-        raise LedsimError("--gimbal pan-tilt is not allowed with --link paper: the paper's "
-                          "bench measures its photodiodes' response about the hinge alone, "
-                          "so no photodiode sees the tilt (choose a physical --link)")
-    if cfg.estimator not in TWO_AXIS_ESTIMATORS:
-        raise LedsimError(f"estimator {cfg.estimator!r} is not allowed with --gimbal "
-                          f"pan-tilt: choose one of {', '.join(TWO_AXIS_ESTIMATORS)}")
-    if cfg.filter_distance != "configured":
-        raise LedsimError(f"--filter-distance {cfg.filter_distance} is not allowed with "
-                          "--gimbal pan-tilt: its filters know the configured distance")
-    if cfg.checkpoint:
-        from ledsim.files.resources import pair_paths
-
-        if cfg.estimator != "kkl":
-            raise LedsimError(f"--checkpoint is not allowed with --estimator "
-                              f"{cfg.estimator} on a pan-tilt head: it is the KKL's pair")
-        missing = [str(p) for p in pair_paths(cfg.checkpoint).values() if not p.is_file()]
-        if missing:
-            raise LedsimError(f"--checkpoint {cfg.checkpoint!r} on a pan-tilt head names a "
-                              f"pair: {missing[0]!r} is missing (ledsim train --gimbal "
-                              "pan-tilt --out NAME writes NAME_azimuth and NAME_elevation)")
 
 
 @functools.lru_cache(maxsize=32)
@@ -291,3 +253,23 @@ def _describe(hint) -> str:
         return "a list of strings"
     return {float: "a number", int: "an integer", bool: "true or false", str: "a string",
             type(None): "null"}.get(hint, hint.__name__)
+
+
+#: The nearest a mission may bring the receiver's gimbal to the LED [m].
+MIN_MISSION_RANGE = 1.0
+
+
+def _check_mission(cfg) -> None:
+    """A mission is flown on the station keeping's thrusters, and keeps the hull off
+    the LED (:data:`MIN_MISSION_RANGE`)."""
+    from ledsim.agent.guidance import Mission
+
+    mission = Mission.from_file(cfg.mission)
+    if not cfg.station_keeping:
+        raise LedsimError(f"--mission {cfg.mission!r} is flown by the station keeping's "
+                          "thrusters: drop --no-station-keeping")
+    rise = 0.0 if cfg.transmitter_depth is None else cfg.depth - cfg.transmitter_depth
+    r, x, y = mission.closest_approach((cfg.distance, 0.0), rise)
+    if r < MIN_MISSION_RANGE:
+        raise LedsimError(f"--mission {cfg.mission!r} passes {r:.2f} m from the LED, at "
+                          f"({x:.2f}, {y:.2f}) m: at least {MIN_MISSION_RANGE:g} m")

@@ -57,6 +57,9 @@ class WorldPart:
             head's calibration measured it (0: matched channels).
         transmitter_aimed: the LED's axis points at the receiver (a node that faces the
             vehicle above or below it); off: level, whatever the depths.
+        mission: a JSON or TOML file of waypoints the receiver's vehicle flies, then
+            keeps station at the last (:mod:`ledsim.agent.guidance`; None: it keeps
+            station where it starts).
         lens_field_deg: a lens in front of the physical receiver's detector, narrowing
             its half-power field to this many degrees and gathering a larger aperture's
             light (the detector's étendue kept: about 8x for 30 to 10 deg) (None: the
@@ -84,6 +87,7 @@ class WorldPart:
     channel_mismatch: float = 0.0
     transmitter_aimed: bool = False
     lens_field_deg: float | None = None
+    mission: str | None = None
 
     def __post_init__(self) -> None:
         if self.distance is None:  # the link preset's (0.085 m on the paper's bench)

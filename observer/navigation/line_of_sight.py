@@ -70,7 +70,7 @@ class LineOfSightFilter(Rows):
     """
 
     ROW_ARRAYS = ("rate", "acceleration", "hull_rate", "bearing", "_raw", "_power",
-                  "_anchor", "k", "_noise_power")
+                  "_anchor", "k", "_noise_power", "ranges")
 
     def __init__(self, Te: float, distance: float, rate_noise: float,
                  rate_time: float = 0.05, bearing_time: float = 2.0,
@@ -87,6 +87,9 @@ class LineOfSightFilter(Rows):
         self.hull_rate, self.bearing = np.zeros(1), np.zeros(1)
         self._raw, self._power, self._anchor = np.zeros(1), np.zeros(1), np.zeros(1)
         self.k = np.zeros(1, dtype=np.int64)
+        #: Each vehicle's range to the LED [m]: the told distance, or where a moving
+        #: vehicle's navigation puts it (set by its owner each step).
+        self.ranges = np.array([float(distance)])
 
     def los_of(self, i: int) -> LineOfSight:
         """Vehicle ``i``'s line of sight at its last step."""
@@ -114,7 +117,7 @@ class LineOfSightFilter(Rows):
         state = (self._raw, self._power, self.rate, self.bearing, self._anchor)
         new = _step(ops(n), self, *columns(n, *state, self.k > 0, v_gimbal[:, 0],
                                            v_gimbal[:, 1], encoder, hull_rate, nav_bearing,
-                                           self._noise_power))
+                                           self._noise_power, self.ranges))
         if n == 1:  # in place: no one holds these arrays
             for arr, value in zip((*state, self.acceleration, self.hull_rate),
                                   new, strict=True):
@@ -127,12 +130,12 @@ class LineOfSightFilter(Rows):
 
 
 def _step(o, f: LineOfSightFilter, raw, power, rate, bearing, anchor, started, vx, vy,
-          encoder, hull_rate, nav_bearing, noise_power):
+          encoder, hull_rate, nav_bearing, noise_power, ranges):
     """One step of the filter's state, each argument a float (one vehicle) or a column
     of N (``o``: :mod:`observer.rowops`); returns the new (raw, power, rate, bearing,
     anchor, acceleration, hull rate)."""
     c, s = o.cos(encoder), o.sin(encoder)
-    w = (-c * vy + s * vx) / f.distance
+    w = (-c * vy + s * vx) / ranges
     raw = raw + f.k_rate * (w - raw)
     power = power + f.k_power * (o.square(raw) - power)
     new_rate = raw * o.maximum(0.0, 1.0 - noise_power / o.maximum(power, 1e-30))
