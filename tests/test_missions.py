@@ -71,6 +71,17 @@ def test_a_docking_approach_is_flown_and_held_and_the_link_kept(tmp_path):
     assert m.goodput_bits >= 0.99 * m.ideal_bits
 
 
+def test_the_filters_model_follows_the_range_the_navigation_knows(tmp_path):
+    """At 10 m of a link configured at 30 m the powers are 9 times the model's: without
+    the range, the EKF read that as pointing (0.083 rad steady, 0.95 of the ideal's
+    bits); told the navigated range, 1.9e-3 rad and 0.998."""
+    spec = RunSpec(link="luma", distance=30.0, estimator="ekf",
+                   mission=_file(tmp_path, DOCK))
+    m = run_once(spec, 0).metrics
+    assert m.rmse_steady["pointing"] < 0.01, m.rmse_steady
+    assert m.goodput_bits >= 0.99 * m.ideal_bits and m.silent_error_share == 0.0
+
+
 def test_a_seed_flying_a_mission_is_the_same_in_a_batch(tmp_path):
     spec = RunSpec(link="luma", distance=30.0, seconds=3.0, mission=_file(
         tmp_path, '{"waypoints": [{"x": 2.0, "y": 1.0, "speed": 1.0}]}'))

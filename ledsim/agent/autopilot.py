@@ -180,6 +180,12 @@ class Vehicle(Rows):
         return self._home_position[0], float(self._home_heading[0])
 
     @property
+    def range(self) -> float:
+        """The LED's range from the gimbal's hinge by the navigated pose [m] (the
+        told distance unless a mission moves the vehicle)."""
+        return float(self.sight.ranges[0])
+
+    @property
     def target(self) -> np.ndarray:
         """Where the vehicle is told to be: its keeper's home, x, y and the depth
         sensor's zero's height [m] (3,) (a mission's target; the station otherwise)."""

@@ -51,17 +51,26 @@ class HeadControlStep(ControlStep):
       of its input;
     - the supervisor sees the encoders in an inertial frame (each plus the hull's turn
       about its hinge since the start), so the angles it remembers still point at the
-      LED after the hull has turned.
+      LED after the hull has turned;
+    - on a moving vehicle (``range_gain``: :class:`~ledsim.agent.range_gain.RangeGain`)
+      the filters' model is told the gain at the range the navigation knows
+      (:meth:`tell_range`).
     """
 
-    def __init__(self, *args, axes=None, **kwargs):
+    def __init__(self, *args, axes=None, range_gain=None, **kwargs):
         super().__init__(*args, **kwargs)
+        self.range_gain = range_gain
         limit = getattr(self.actuator, "u_limit", None)
         self.loads = None if axes is None else [
             LoadObserver(m, max_load=None if limit is None else float(lim))
             for m, lim in zip(axes, np.broadcast_to(limit, (len(axes),)), strict=True)]
         self._turned = np.zeros(2)  # the hull's turn about each hinge since the start
         self._motor_enc = np.zeros(2)  # the encoders' u the motors gave last step
+
+    def tell_range(self, r: float) -> None:
+        """The vehicle's navigation puts the LED ``r`` [m] away now."""
+        if self.range_gain is not None:
+            self.range_gain.tell(r)
 
     def __call__(self, y, t, q=0.0, qdot=0.0, los=None):
         act = self.actuator

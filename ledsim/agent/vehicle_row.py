@@ -39,6 +39,11 @@ class VehicleRow:
         return target_of(self.vehicles, self.i)
 
     @property
+    def range(self) -> float:
+        """The LED's range from the gimbal's hinge by the navigated pose [m]."""
+        return float(self.vehicles.sight.ranges[self.i])
+
+    @property
     def navigation(self) -> InsState:
         s, i = self.vehicles.ins.states, self.i
         return InsState(s.position[i], s.velocity[i], s.attitude[i], s.gyro_bias[i],

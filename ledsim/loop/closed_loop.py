@@ -103,6 +103,8 @@ class LoopRun:
             self.navigated[k] = self.vehicle.navigated_position
             if self.moving:
                 self.station[k] = self.vehicle.target
+                if hasattr(self.step, "tell_range"):  # the pan-tilt's filters' gain
+                    self.step.tell_range(self.vehicle.range)
         t0 = time.perf_counter()
         los = None
         if self.aided:  # a pan-tilt head takes the gyro's three rates (agent/pan_tilt.py)

@@ -107,6 +107,11 @@ class HeadModel(DiscreteSystem):
                          self.inertia, (self.domain_high[0], self.domain_high[2]),
                          self.measurement_noise.scale, channel_gains)
 
+    def set_power_gain(self, gain: float) -> None:
+        """Compute with the power gain ``gain`` [W] from now on (a moving vehicle's
+        range: :class:`~ledsim.agent.range_gain.RangeGain`)."""
+        self.power_gain, self._last = float(gain), None
+
     # -- the input mapping -----------------------------------------------------------
 
     def torque_for(self, u) -> np.ndarray:

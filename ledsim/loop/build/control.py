@@ -14,6 +14,7 @@ from ledsim.agent.gate import DropoutGate
 from ledsim.agent.head_supervisor import HeadSupervisor
 from ledsim.agent.laws import intensity_maximum
 from ledsim.agent.pan_tilt import HeadControlStep, HeadMotor
+from ledsim.agent.range_gain import RangeGain
 from ledsim.agent.slew import TimeOptimalSlew
 from ledsim.agent.step import ControlStep, GimbalMotor, Unsupervised
 from ledsim.agent.supervisor import LinkSupervisor
@@ -119,6 +120,10 @@ def head_control_step(cfg: RunConfig, system: HeadSystem, model: HeadModel, seed
     spec = cfg.scenario_spec
     limit = system.config.torque_limit
     model = head_model(cfg, model)
+    range_gain = None
+    if cfg.mission is not None and cfg.estimator in ("ekf", "ukf", "pf"):
+        model = model.calibrated(model.channel_gains)  # its own: its gain moves
+        range_gain = RangeGain(model, cfg.distance, system.constants.attenuation)
     if cfg.estimator == "oracle":
         est = Oracle(system, truth)
     else:
@@ -140,7 +145,8 @@ def head_control_step(cfg: RunConfig, system: HeadSystem, model: HeadModel, seed
     # with the vehicle's gyro, each hinge's load observer on that axis's dynamics
     axes = [AxisRatioModel(model, a) for a in range(2)] if cfg.imu else None
     return HeadControlStep(dropout_gate(system.constants, supervisor), supervisor, spec.law,
-                           system.constants, motor, spec.warmup, axes=axes)
+                           system.constants, motor, spec.warmup, axes=axes,
+                           range_gain=range_gain)
 
 
 def dropout_gate(constants, supervisor) -> DropoutGate:
