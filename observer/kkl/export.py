@@ -73,8 +73,12 @@ class _Graph:
     """A small builder over ``onnx.helper``: every node gets a fresh name."""
 
     def __init__(self):
-        import onnx
-        from onnx import helper, numpy_helper
+        try:
+            import onnx
+            from onnx import helper, numpy_helper
+        except ImportError:
+            raise ObserverError("exporting to ONNX needs the onnx package: "
+                                "pip install 'ledsim[onnx]'") from None
 
         self.onnx, self.helper, self.numpy_helper = onnx, helper, numpy_helper
         self.nodes, self.inits, self._n = [], [], 0
@@ -105,6 +109,25 @@ class _Graph:
                 W.T, f"{stem}_Wm{i}")), self.const(b, f"{stem}_bm{i}")))
         return self.op("Add", self.op("MatMul", h, self.const(net.W2.T, f"{stem}_W2")),
                        self.const(net.b2, f"{stem}_b2"), stem=stem)
+
+    def model(self, name: str, inputs: dict, outputs: dict, props: dict | None = None):
+        """The checked ``onnx.ModelProto`` of the nodes so far: float64 ``inputs`` and
+        ``outputs`` by name and shape (each output an ``Identity`` of the value named),
+        ``props`` its metadata."""
+        h, dbl = self.helper, self.onnx.TensorProto.DOUBLE
+        for key, (value, _) in outputs.items():
+            self.nodes.append(h.make_node("Identity", [value], [key]))
+        graph = h.make_graph(
+            self.nodes, name, [h.make_tensor_value_info(k, dbl, s) for k, s in inputs.items()],
+            [h.make_tensor_value_info(k, dbl, s) for k, (_, s) in outputs.items()],
+            initializer=self.inits)
+        model = h.make_model(graph, opset_imports=[h.make_opsetid("", OPSET)],
+                             producer_name="ledsim")
+        model.ir_version = 8  # readable by onnxruntime releases of the last few years
+        if props:
+            h.set_model_props(model, props)
+        self.onnx.checker.check_model(model)
+        return model
 
     def component(self, v: str, i: int) -> str:
         """Element ``i`` of a vector, as a vector of one."""
@@ -147,13 +170,7 @@ def _h(g: _Graph, form: StepForm, x: str) -> str:
 
 def kkl_step_graph(obs: KKLObserver, form: StepForm, name: str = "kkl_step"):
     """The ONNX model (``onnx.ModelProto``) of one step of ``obs`` (module docstring)."""
-    try:
-        import onnx  # noqa: F401
-    except ImportError:
-        raise ObserverError("exporting to ONNX needs the onnx package: "
-                            "pip install 'ledsim[onnx]'") from None
     g = _Graph()
-    h = g.helper
     q, p, n = obs.q, obs.system.n_output, obs.system.n_state
     if len(form.photodiode_offsets) != p:
         raise ObserverError(f"the step form has {len(form.photodiode_offsets)} photodiodes "
@@ -173,18 +190,5 @@ def kkl_step_graph(obs: KKLObserver, form: StepForm, name: str = "kkl_step"):
                      g.mlp(obs.encoder_T, _f(g, form, x_hat, u_bar), "encoder_T_bar"))
         omega = g.op("Where", g.op("Equal", "u", u_bar), g.const(np.zeros(q)), omega)
         z_next = g.op("Add", z_next, omega)
-    g.nodes.append(h.make_node("Identity", [x_hat], ["x_hat"]))
-    g.nodes.append(h.make_node("Identity", [z_next], ["z_next"]))
-    dbl = onnx.TensorProto.DOUBLE
-    graph = h.make_graph(
-        g.nodes, name,
-        [h.make_tensor_value_info("z", dbl, [q]), h.make_tensor_value_info("y", dbl, [p]),
-         h.make_tensor_value_info("u", dbl, [1])],
-        [h.make_tensor_value_info("x_hat", dbl, [n]),
-         h.make_tensor_value_info("z_next", dbl, [q])],
-        initializer=g.inits)
-    model = h.make_model(graph, opset_imports=[h.make_opsetid("", OPSET)],
-                         producer_name="ledsim")
-    model.ir_version = 8  # readable by onnxruntime releases of the last few years
-    onnx.checker.check_model(model)
-    return model
+    return g.model(name, {"z": [q], "y": [p], "u": [1]},
+                   {"x_hat": (x_hat, [n]), "z_next": (z_next, [q])})

@@ -32,7 +32,7 @@ from pathlib import Path
 import numpy as np
 
 from observer.exceptions import ObserverError
-from observer.kkl.export import OPSET, _Graph
+from observer.kkl.export import _Graph
 from observer.kkl.gainmaps import GainTableMap
 
 #: The graph's kind (its metadata ``ledsim_kind``), which ``ledsim replay`` reads.
@@ -104,39 +104,17 @@ def _map(g: _Graph, m: GainTableMap, v: str, log_w: str, log_s: str | None,
 def scheduled_maps_graph(obs, name: str = "scheduled_kkl_maps"):
     """The ONNX model (``onnx.ModelProto``) of the maps of the gain-scheduled KKL
     ``obs`` (the module's table)."""
-    try:
-        import onnx
-    except ImportError:
-        raise ObserverError("exporting to ONNX needs the onnx package: "
-                            "pip install 'ledsim[onnx]'") from None
     g = _Graph()
-    h = g.helper
     n, q = obs.system.n_state, obs.q
     log_w = g.op("Log", _scalar(g, "w"))
     log_s = g.op("Log", _scalar(g, "s"))
-    outs = {"T": _map(g, obs.encoder_T, "x", log_w, None, "T"),
-            "T_star": _map(g, obs.decoder_T_star, "z", log_w, log_s, "T_star")}
+    outs = {"T": (_map(g, obs.encoder_T, "x", log_w, None, "T"), ["N", q]),
+            "T_star": (_map(g, obs.decoder_T_star, "z", log_w, log_s, "T_star"), ["M", n])}
     if obs.decoder_locked is not None:
-        outs["T_star_locked"] = _map(g, obs.decoder_locked, "z", log_w, log_s,
-                                     "T_star_locked")
-    for key, value in outs.items():
-        g.nodes.append(h.make_node("Identity", [value], [key]))
-    dbl = onnx.TensorProto.DOUBLE
-    graph = h.make_graph(
-        g.nodes, name,
-        [h.make_tensor_value_info("x", dbl, ["N", n]),
-         h.make_tensor_value_info("z", dbl, ["M", q]),
-         h.make_tensor_value_info("w", dbl, [1]), h.make_tensor_value_info("s", dbl, [1])],
-        [h.make_tensor_value_info("T", dbl, ["N", q]),
-         *(h.make_tensor_value_info(k, dbl, ["M", n]) for k in outs if k != "T")],
-        initializer=g.inits)
-    model = h.make_model(graph, opset_imports=[h.make_opsetid("", OPSET)],
-                         producer_name="ledsim")
-    model.ir_version = 8
-    onnx.helper.set_model_props(model, {"ledsim_kind": KIND, "n_state": str(n),
-                                        "q": str(q)})
-    onnx.checker.check_model(model)
-    return model
+        outs["T_star_locked"] = (_map(g, obs.decoder_locked, "z", log_w, log_s,
+                                      "T_star_locked"), ["M", n])
+    return g.model(name, {"x": ["N", n], "z": ["M", q], "w": [1], "s": [1]}, outs,
+                   {"ledsim_kind": KIND, "n_state": str(n), "q": str(q)})
 
 
 class OnnxGainMap:
