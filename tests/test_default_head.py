@@ -98,3 +98,12 @@ def test_a_scene_hinge_mismatch_is_one_line_and_exit_2_on_the_command_line(tmp_p
     assert r.returncode == 2, r.stderr
     assert len(r.stderr.strip().splitlines()) == 1 and "gimbal_hinge" in r.stderr
     assert not (tmp_path / "o").exists()
+
+
+def test_a_saved_config_keeps_its_head_and_an_older_one_reads_as_the_yaw():
+    saved = json.loads(json.dumps(RunSpec(link="luma", estimator="ekf").flat()))
+    assert saved["gimbal"] == "pan-tilt"  # saved as run
+    assert RunSpec.from_dict(saved).world.head == ("pan-tilt", "quad")
+    older = {**saved, "gimbal": None, "receiver": None}  # before the default
+    assert RunSpec.from_dict(older).world.head == ("yaw", "pair")
+    assert RunSpec().flat()["gimbal"] is None  # the bench's saves as before

@@ -32,6 +32,7 @@ def _file(tmp_path, text: str, suffix: str = ".json") -> str:
      ".json", "waypoint 1 repeats"),
     ('{"waypoints": [{"x": 9000, "y": 0, "speed": 1}]}', ".json", "more than 5000 m"),
     ("{}", ".yaml", "a .json or .toml file"),
+    ("waypoints = [1979-05-27]", ".toml", "waypoint 0 is not"),
 ])
 def test_a_bad_mission_is_refused_in_one_line(tmp_path, text, suffix, match):
     with pytest.raises(MissionError, match=match):
@@ -110,3 +111,17 @@ def test_the_command_line_refuses_a_mission_into_the_led_and_warns_of_clipping(t
     assert r.returncode == 0, r.stderr
     res = json.loads((tmp_path / "b" / "results.json").read_text())
     assert res["spec"]["mission"] == close
+
+
+def test_a_mission_under_an_led_at_another_depth_measures_the_slant_range(tmp_path):
+    """The LED 8 m above at a slant of 30 m stands 28.9 m ahead: a path under it passes
+    8 m off, not 0, and its range starts at 30 m (not the 31 m of an LED 30 m ahead)."""
+    under = _file(tmp_path, '{"waypoints": [{"x": 28.9, "y": 0.0, "speed": 1.0}]}')
+    spec = RunSpec(link="luma", distance=30.0, depth=10.0, transmitter_depth=2.0,
+                   mission=under)
+    spec.validate()
+    _, d = range_path(spec)
+    assert d[0] == pytest.approx(30.0) and d.min() == pytest.approx(8.0, abs=0.01)
+    m = run_once(RunSpec(**{**spec.flat(), "seconds": 2.0, "window": 1.0}), 0,
+                 window=1.0)  # a mission's moving station in the windows
+    assert len(m.windows) == 2 and all(w.hull_error_rms < 1.0 for w in m.windows)

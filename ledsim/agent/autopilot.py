@@ -43,12 +43,13 @@ import math
 
 import numpy as np
 
-from ledsim.agent.guidance import Mission, PathReference
+from ledsim.agent.guidance import Mission, PathReference, led_in_start_frame
 from ledsim.agent.keeping import StationKeeper, StationKeeping
 from ledsim.agent.vehicle_row import VehicleRow, target_of
 from ledsim.constants import GRAVITY, NavigationNoise
 from ledsim.physics.batch import cross3
 from ledsim.physics.nav_sensors import GRAVITY_REACTION, NavigationReading, NavigationSensor
+from ledsim.physics.scene import transmitter_rise
 from ledsim.physics.world import LinkWorld
 from observer.navigation.ins import FIX_GATE, AidedINS, InertialNoise, InsState
 from observer.navigation.line_of_sight import LineOfSight, LineOfSightFilter
@@ -58,6 +59,11 @@ from observer.rows import matvec as _mv
 from observer.rows import transposed as _T
 
 __all__ = ["LineOfSight", "StationKeeping", "Vehicle", "inertial_noise"]
+
+
+#: The nearest range [m] a moving vehicle's line of sight and filters take (a mission
+#: keeps 1 m off the LED: loop/validation.py).
+MIN_RANGE = 0.5
 
 
 def inertial_noise(n: NavigationNoise) -> InertialNoise:
@@ -133,10 +139,15 @@ class Vehicle(Rows):
         rate_noise = math.sqrt(dvl + gyro * Te / (2 * rate_time)) / distance
         self.sight = LineOfSightFilter(Te, distance, rate_noise, rate_time, bearing_time,
                                        reanchor_rate, reanchor_time, reanchor_bearing_time)
-        # Where the start put the LED: d ahead of the hinge along the hull's axis.
+        # Where the start put the LED: ahead of the hinge along the hull's axis, the
+        # slant distance d less the LED's rise, and to the side (physics/scene.py).
         R0 = world.hull_rotation
         hinge0 = world.hull_pos[:2] + (R0 @ l_gimbal)[:2]
-        self.led = (hinge0 + distance * R0[:2, 0] / np.linalg.norm(R0[:2, 0]))[None]
+        cfg = world.config
+        self._rise = transmitter_rise(cfg.depth, cfg.transmitter_depth, distance)
+        ahead, lateral = led_in_start_frame(distance, self._rise, cfg.led_lateral_offset)
+        x_dir = R0[:2, 0] / np.linalg.norm(R0[:2, 0])
+        self.led = (hinge0 + ahead * x_dir + lateral * np.array([-x_dir[1], x_dir[0]]))[None]
         self._bearing0 = np.zeros(1)
         self._bearing0 = self._led_bearing(self.ins.states)
 
@@ -265,7 +276,8 @@ class Vehicle(Rows):
             k.home_position[i], k.home_velocity[i], k.home_heading[i] = \
                 position, velocity, heading
         hinge = nav.position[:, :2] + _mv(nav.attitude, self.l_gimbal)[:, :2]
-        self.sight.ranges = np.hypot(*(self.led - hinge).T)
+        level = np.hypot(*(self.led - hinge).T)
+        self.sight.ranges = np.maximum(np.hypot(level, self._rise), MIN_RANGE)
 
     def _led_bearing(self, nav: InsState) -> np.ndarray:
         """The LED's bearing from the gimbal's hinge in the hull's frame [rad] by the

@@ -117,7 +117,7 @@ def _load(path: str) -> Mission:
         where = f"--mission {path!r}: waypoint {k}"
         if not isinstance(w, dict) or set(w) != {"x", "y", "speed"}:
             raise MissionError(f"{where} is not {{\"x\": X, \"y\": Y, \"speed\": V}}: "
-                               f"{json.dumps(w)[:60]}")
+                               f"{json.dumps(w, default=str)[:60]}")
         values = {}
         for key in ("x", "y", "speed"):
             v = w[key]
@@ -136,6 +136,15 @@ def _load(path: str) -> Mission:
         last = (values["x"], values["y"])
         out.append(Waypoint(**values))
     return Mission(tuple(out))
+
+
+def led_in_start_frame(distance: float, rise: float, lateral: float = 0.0
+                       ) -> tuple[float, float]:
+    """Where the scene puts the LED in the start frame, horizontally, from the gimbal's
+    hinge (x ahead, y left [m]): ``distance`` is the slant range to an LED ``rise`` [m]
+    above (below: negative) and ``lateral`` [m] to the left (``physics/scene.py``)."""
+    ahead = distance if rise == 0.0 else math.sqrt(distance**2 - rise**2)
+    return ahead, lateral
 
 
 class PathReference:

@@ -58,7 +58,8 @@ class HeadSupervisor:
             the fix, is slewed to ...
         reslew_time: ... when it stays so for this long [s], each step counted by how
             many ``reslew`` it is off (one sample's fix carries the noise and the
-            photodiodes' own fading: 0.1 rad in scintillation at half the FEC range;
+            photodiodes' own fading: 0.03 rad rms, 0.1 at worst, in scintillation at half
+            the FEC range;
             a kick's estimate left behind is off by more at once).
         fit_fixes: how many of the last fixes the LED's direction and turn are fitted
             to while acquiring (a straight line in time, by least squares).
@@ -165,6 +166,8 @@ class HeadSupervisor:
                 self.spiral.start(q)
             self.mode = "lost"
             return Decision(xhat, True, True, self._scan(q, qdot), reason="searching")
+        if self.mode != "lost":  # an acquisition lost: its fixes are of before the gap
+            self._seen.clear()
         self.mode = "lost"
         held = self._carried(q, qdot)
         if self.spiral.active:
@@ -206,6 +209,7 @@ class HeadSupervisor:
         if self._dark_steps < self.loss_steps:
             return Decision(xhat, False)
         self.mode, self._waited = "lost", 0
+        self._seen.clear()  # the fixes before a loss say nothing of the LED's turn after
         return Decision(xhat, True, True, self._slew(q, qdot), reason="dark",
                         held=self._carried(q, qdot), held_std=self._std)
 
@@ -229,6 +233,7 @@ class HeadSupervisor:
         self.estimator.reset(np.r_[fix, to_head(turn - qdot, self._q)])
         self.mode, self._dark_steps, self._turn = "tracking", 0, None
         self._seen.clear()
+        self._off_steps = 0.0
         return Decision(self._update(y), False, reseeded=True, reason=reason)
 
     def predict(self, u) -> None:

@@ -34,6 +34,6 @@ class RangeGain:
 
     def tell(self, r: float) -> None:
         """The range is ``r`` [m] now."""
-        d = self.distance
+        d, r = self.distance, max(float(r), 0.5)  # a mission keeps 1 m off the LED
         self.model.set_power_gain(self.base * (d / r) ** 2 *
                                   math.exp(-self.attenuation * (r - d)))

@@ -27,11 +27,12 @@ def range_path(cfg) -> tuple[np.ndarray, np.ndarray]:
     t = np.arange(0.0, cfg.run_seconds + PATH_STEP / 2, PATH_STEP)
     d = np.full(t.shape, float(cfg.distance))
     if cfg.mission is not None:
-        from ledsim.agent.guidance import Mission, PathReference
+        from ledsim.agent.guidance import Mission, PathReference, led_in_start_frame
 
         where = PathReference(Mission.from_file(cfg.mission), (0.0, 0.0), 0.0).positions(t)
         rise = 0.0 if cfg.transmitter_depth is None else cfg.depth - cfg.transmitter_depth
-        d = np.sqrt((cfg.distance - where[:, 0]) ** 2 + where[:, 1] ** 2 + rise ** 2)
+        x, y = led_in_start_frame(cfg.distance, rise)
+        d = np.sqrt((x - where[:, 0]) ** 2 + (y - where[:, 1]) ** 2 + rise ** 2)
     for spec in cfg.disturbances:
         dist = parse_disturbance(spec)
         if isinstance(dist, TransmitterMotion) and dist.drift:

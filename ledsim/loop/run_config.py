@@ -166,8 +166,27 @@ class RunSpec:
         return run_from_dict(cls, saved)
 
     def flat(self) -> dict:
-        """Every flat name and its value (the results' and the sweep's columns)."""
-        return {name: getattr(getattr(self, part), name) for name, part in FLAT.items()}
+        """Every flat name and its value (the results' and the sweep's columns). On a
+        physical link the head is saved as run (a saved config with no head there is
+        one of ledsim before the pan-tilt default: :meth:`from_dict` reads it as the
+        yaw gimbal)."""
+        out = {name: getattr(getattr(self, part), name) for name, part in FLAT.items()}
+        if self.link != "paper":
+            out["gimbal"], out["receiver"] = self.world.head
+        return out
+
+    def _same_run(self) -> tuple:
+        """What makes two specs the same run: every flat name, the head as run."""
+        flat = {**self.flat(), "gimbal": self.world.head[0], "receiver": self.world.head[1]}
+        return tuple(sorted(flat.items()))
+
+    def __eq__(self, other) -> bool:
+        """Two specs are equal when they are the same run: a head left to its default
+        equals that head named (``RunSpec(link="luma")`` is the pan-tilt's)."""
+        return isinstance(other, RunSpec) and self._same_run() == other._same_run()
+
+    def __hash__(self) -> int:
+        return hash(self._same_run())
 
     def validate(self) -> None:
         """Raise :class:`LedsimError` naming the first choice or value not allowed."""

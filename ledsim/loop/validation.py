@@ -206,7 +206,8 @@ def run_from_dict(cls, saved: dict):
     if not isinstance(saved, dict):
         raise LedsimError(f"a run configuration is a JSON object, not {type(saved).__name__}")
     parts = typing.get_type_hints(cls)
-    if any(k in parts for k in saved):  # by parts: flatten, each part's keys its own
+    by_parts = any(k in parts for k in saved)
+    if by_parts:  # by parts: flatten, each part's keys its own
         flat = {}
         for part, values in saved.items():
             if part not in parts or not isinstance(values, dict):
@@ -225,6 +226,12 @@ def run_from_dict(cls, saved: dict):
             shown = shown if len(shown) <= 40 else shown[:37] + "..."
             raise LedsimError(f"{key} {shown} is not allowed: must be "
                               f"{_describe(hints[key])}")
+    if not by_parts and saved.get("link", "paper") != "paper" and \
+            saved.get("gimbal") is None and saved.get("receiver") is None:
+        # ledsim's own saves (results.json's spec, a trace's config) are flat and name a
+        # physical link's head since the pan-tilt became its default: one that does not
+        # was saved before, on the yaw
+        saved = {**saved, "gimbal": "yaw"}
     cfg = cls(**{k: tuple(v) if isinstance(v, list) else v for k, v in saved.items()})
     validate_run(cfg)
     return cfg
@@ -262,14 +269,14 @@ MIN_MISSION_RANGE = 1.0
 def _check_mission(cfg) -> None:
     """A mission is flown on the station keeping's thrusters, and keeps the hull off
     the LED (:data:`MIN_MISSION_RANGE`)."""
-    from ledsim.agent.guidance import Mission
+    from ledsim.agent.guidance import Mission, led_in_start_frame
 
     mission = Mission.from_file(cfg.mission)
     if not cfg.station_keeping:
         raise LedsimError(f"--mission {cfg.mission!r} is flown by the station keeping's "
                           "thrusters: drop --no-station-keeping")
     rise = 0.0 if cfg.transmitter_depth is None else cfg.depth - cfg.transmitter_depth
-    r, x, y = mission.closest_approach((cfg.distance, 0.0), rise)
+    r, x, y = mission.closest_approach(led_in_start_frame(cfg.distance, rise), rise)
     if r < MIN_MISSION_RANGE:
         raise LedsimError(f"--mission {cfg.mission!r} passes {r:.2f} m from the LED, at "
                           f"({x:.2f}, {y:.2f}) m: at least {MIN_MISSION_RANGE:g} m")

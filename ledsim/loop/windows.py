@@ -96,7 +96,8 @@ def window_metrics(p1: np.ndarray, power_max: np.ndarray, noise_std: float, Te: 
         out.append(WindowMetrics(
             a * Te, b * Te, float(np.mean(available[a:b])), budget.fec_share,
             float(np.mean(p1[a:b])),
-            horizontal_rms(hull[a:b], station) if vehicle else None,
+            horizontal_rms(hull[a:b], station[a:b] if np.ndim(station) == 2 else station)
+            if vehicle else None,
             horizontal_rms(navigated[a:b], hull[a:b])
             if vehicle and navigated is not None else None,
             **({} if steps is None else _estimate_metrics(steps, a, b))))

@@ -3,8 +3,8 @@
 The data rides on the data detector (the pair's ``pd1``, the quad's boresight ``pd0``),
 on-off keyed at the run's bit rate (:mod:`ledsim.radiometry.data_channel`: each step's
 SNR and BER from its noise-free power). The code is a binary BCH code of length
-n = 2^15 - 1 = 32767 bits correcting t = 160 errors, k = n - 15 t = 30367 data bits (7.3 %
-overhead): hard-decision FEC of the 7 % class whose threshold the link budget's
+n = 2^15 - 1 = 32767 bits correcting t = 160 errors, k = n - 15 t = 30367 data bits (7.9 %
+overhead on the data): hard-decision FEC of the 7 % class whose threshold the link budget's
 :data:`~ledsim.radiometry.data_channel.FEC_LIMIT` (3.8e-3) is (ITU-T G.975.1, whose 7 %
 codes reach an output BER of 1e-15 there). A frame is lost when more than t of its n
 bits are wrong, so at the step's BER p
