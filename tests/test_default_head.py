@@ -107,3 +107,20 @@ def test_a_saved_config_keeps_its_head_and_an_older_one_reads_as_the_yaw():
     older = {**saved, "gimbal": None, "receiver": None}  # before the default
     assert RunSpec.from_dict(older).world.head == ("yaw", "pair")
     assert RunSpec().flat()["gimbal"] is None  # the bench's saves as before
+
+
+def test_a_sweep_whose_estimators_run_on_different_heads_says_so(caplog):
+    from ledsim.cli.checks import _warn_mixed_heads
+    from ledsim.loop.sweep import SweepGrid
+
+    def grid(*estimators, **kw):
+        return SweepGrid(estimators=estimators, disturbances=["none"], distances=[30.0],
+                         noise_scales=[1.0], seeds=1, base=RunSpec(link="luma", **kw))
+
+    with caplog.at_level("WARNING", logger="ledsim"):
+        _warn_mixed_heads(grid("ekf", "kkl-bank"))
+        assert "ekf on the pan-tilt, kkl-bank on the yaw" in caplog.text
+        caplog.clear()
+        _warn_mixed_heads(grid("ekf", "kkl-bank", gimbal="yaw"))
+        _warn_mixed_heads(grid("ekf", "kkl"))
+        assert caplog.text == ""

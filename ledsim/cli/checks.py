@@ -5,6 +5,7 @@ the one-axis gimbal's plane."""
 from __future__ import annotations
 
 import logging
+from dataclasses import replace
 
 from ledsim.errors import LedsimError
 
@@ -129,3 +130,15 @@ def _say_head(cfg, args) -> None:
     log.info(f"runs the yaw gimbal with its pair, not a physical link's pan-tilt default: "
              f"{why} (--gimbal yaw says so; --gimbal pan-tilt takes "
              f"{', '.join(TWO_AXIS_ESTIMATORS)})")
+
+
+def _warn_mixed_heads(grid) -> None:
+    """Say so when a sweep's estimators run on different heads: on a physical link a
+    one-axis estimator turns the default head into the yaw, the others the pan-tilt."""
+    heads = {}
+    for est in grid.estimators:
+        heads.setdefault(replace(grid.base, estimator=est).world.head[0], est)
+    if len(heads) > 1:
+        log.warning("the sweep's estimators run on different heads (" + ", ".join(
+            f"{e} on the {g}" for g, e in sorted(heads.items())) + "): name --gimbal yaw "
+            "to compare them on one")

@@ -274,14 +274,14 @@ def _train_pair(args) -> int:
 
 
 def sweep(args) -> int:
+    from ledsim.cli.checks import _warn_mixed_heads
     from ledsim.loop.run_config import RunConfig
     from ledsim.loop.sweep import SweepGrid, run_sweep
     from ledsim.radiometry.link_presets import default_distance
 
     if args.address is not None and args.backend != "ray":
         raise LedsimError("--address needs --backend ray")
-    # the grid's flags (repeatable), and the sweep's own seeds and workers, apart
-    base = RunConfig(**spec_values(args, exclude=(
+    base = RunConfig(**spec_values(args, exclude=(  # the grid's flags and the sweep's apart
         "estimator", "disturbances", "distance", "noise_scale", "seeds", "workers")))
     base.validate()
     _check_vehicle(base)
@@ -290,6 +290,7 @@ def sweep(args) -> int:
                      distances=args.distance or [default_distance(args.link)],
                      noise_scales=args.noise_scale or [1.0], seeds=args.seeds, base=base)
     out = check_out_dir(args.out)
+    _warn_mixed_heads(grid)
     t0 = time.perf_counter()
     rows, paths = run_sweep(grid, out, args.backend, args.workers, args.address,
                             progress=not args.quiet, plot=not args.no_plot)

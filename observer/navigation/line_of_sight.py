@@ -115,9 +115,11 @@ class LineOfSightFilter(Rows):
         """:meth:`update` of every vehicle: (N, 3), (N,), (N,), (N,)."""
         n = self.n
         state = (self._raw, self._power, self.rate, self.bearing, self._anchor)
+        # the rate's noise goes as 1 / range: its power at each vehicle's range now
+        noise = self._noise_power * np.square(self.distance / self.ranges)
         new = _step(ops(n), self, *columns(n, *state, self.k > 0, v_gimbal[:, 0],
                                            v_gimbal[:, 1], encoder, hull_rate, nav_bearing,
-                                           self._noise_power, self.ranges))
+                                           noise, self.ranges))
         if n == 1:  # in place: no one holds these arrays
             for arr, value in zip((*state, self.acceleration, self.hull_rate),
                                   new, strict=True):
