@@ -47,7 +47,7 @@ def _warn_saturated(cfg) -> None:
     c = cfg.world_config(distance=distance if t else None).constants
     peak, digitiser = peak_power(c), c.measurement_noise(cfg.noise_scale).digitiser
     where = f"at --distance {cfg.distance:g}" if t == 0.0 else \
-        f"from {distance:.1f} m on, {t:.1f} s into the run (the transmitter's drift)"
+        f"from {distance:.1f} m on, {t:.1f} s into the run (along its path)"
     log.warning(f"the receiver saturates {where}: its peak power "
                 f"{peak:.3g} W reaches its digitiser's full scale of "
                 f"{digitiser.full_scale:.3g} W, so aligned samples clip and the "

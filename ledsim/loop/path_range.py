@@ -13,6 +13,7 @@ from __future__ import annotations
 import numpy as np
 
 from ledsim.physics.disturbances import TransmitterMotion, parse_disturbance
+from ledsim.physics.scene import transmitter_rise
 from ledsim.radiometry.link_presets import link_constants
 from ledsim.radiometry.optics import receiver_saturates
 
@@ -30,7 +31,7 @@ def range_path(cfg) -> tuple[np.ndarray, np.ndarray]:
         from ledsim.agent.guidance import Mission, PathReference, led_in_start_frame
 
         where = PathReference(Mission.from_file(cfg.mission), (0.0, 0.0), 0.0).positions(t)
-        rise = 0.0 if cfg.transmitter_depth is None else cfg.depth - cfg.transmitter_depth
+        rise = transmitter_rise(cfg.depth, cfg.transmitter_depth, cfg.distance)
         x, y = led_in_start_frame(cfg.distance, rise)
         d = np.sqrt((x - where[:, 0]) ** 2 + (y - where[:, 1]) ** 2 + rise ** 2)
     for spec in cfg.disturbances:

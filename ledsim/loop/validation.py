@@ -275,7 +275,7 @@ def _check_mission(cfg) -> None:
     if not cfg.station_keeping:
         raise LedsimError(f"--mission {cfg.mission!r} is flown by the station keeping's "
                           "thrusters: drop --no-station-keeping")
-    rise = 0.0 if cfg.transmitter_depth is None else cfg.depth - cfg.transmitter_depth
+    rise = transmitter_rise(cfg.depth, cfg.transmitter_depth, cfg.distance)
     r, x, y = mission.closest_approach(led_in_start_frame(cfg.distance, rise), rise)
     if r < MIN_MISSION_RANGE:
         raise LedsimError(f"--mission {cfg.mission!r} passes {r:.2f} m from the LED, at "
