@@ -6,9 +6,9 @@ import json
 from conftest import run_cli
 
 
-def _run(tmp_path, transmitter_depth: float):
-    out = tmp_path / f"tx{transmitter_depth:g}"
-    r = run_cli("run", "--link", "luma", "--gimbal", "yaw", "--depth", "20", "--transmitter-depth",
+def _run(tmp_path, transmitter_depth: float, gimbal: str = "yaw"):
+    out = tmp_path / f"tx{transmitter_depth:g}{gimbal}"
+    r = run_cli("run", "--link", "luma", "--gimbal", gimbal, "--depth", "20", "--transmitter-depth",
                 str(transmitter_depth), "--estimator", "oracle", "--seeds", "1",
                 "--seconds", "1", "--no-plot", "--quiet", "--out", str(out))
     assert r.returncode == 0, r.stderr
@@ -34,3 +34,9 @@ def test_a_small_elevation_is_said_without_a_verdict_and_a_level_link_not_at_all
     assert len(note) == 1 and "5.7 deg above" in note[0] and "expect" not in note[0]
     stderr, _ = _run(tmp_path, 18.5)  # 2.9 deg
     assert "yaw gimbal's plane" not in stderr
+
+
+def test_the_pan_tilt_a_physical_link_points_by_default_is_not_warned(tmp_path):
+    stderr, results = _run(tmp_path, 10.0, gimbal="pan-tilt")
+    assert "gimbal's plane" not in stderr, stderr
+    assert results["availability"]["mean"] > 0.9  # it turns to the LED

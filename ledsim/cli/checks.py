@@ -92,7 +92,7 @@ def _warn_out_of_plane(cfg) -> None:
     from ledsim.loop.run_metrics import AVAILABILITY_LEVEL
     from ledsim.radiometry.optics import receiver_response
 
-    if cfg.transmitter_depth is None:
+    if cfg.transmitter_depth is None or cfg.world.two_axes:  # a pan-tilt turns to it
         return
     c = cfg.world_config().constants
     if c.link is None:  # the bench measures only about the hinge
