@@ -29,7 +29,9 @@ class Digitiser:
     steps of a programmable-gain amplifier). It picks the most sensitive range whose
     full scale, ``full_scale x step_ratio^-j``, holds twice the clean signal; the ADC
     rounds to ``2^bits`` steps over +-that range and clips beyond it. Above the least
-    sensitive range the receiver saturates at ``full_scale``. The gain control follows
+    sensitive range the detector's own gain turns down ``headroom_steps`` more steps (a
+    photomultiplier's control voltage, an avalanche photodiode's bias), and above that
+    the receiver saturates at :attr:`saturation`. The gain control follows
     the clean signal (it averages over many samples), so the step is a function of it:
     with 6 dB steps and 12 bits the step is 2.8e-4 to 5.6e-4 of the signal (rms).
 
@@ -47,6 +49,8 @@ class Digitiser:
         decades: the span of the gain control [decades].
         step_ratio: the ratio of neighbouring ranges' full scales [-].
         conversions: conversions averaged into one sample [-].
+        headroom_steps: steps of ``step_ratio`` the detector's gain turns down above
+            the ADC's least sensitive range [-] (0: none; the ranges below are the same).
     """
 
     bits: int = 12
@@ -54,6 +58,7 @@ class Digitiser:
     decades: int = 6
     step_ratio: float = 2.0
     conversions: int = 1
+    headroom_steps: int = 0
 
     def __post_init__(self) -> None:
         if not (isinstance(self.bits, int) and 1 <= self.bits <= 32):
@@ -69,6 +74,9 @@ class Digitiser:
         if not (isinstance(self.conversions, int) and 1 <= self.conversions <= 10**7):
             raise ValueError(f"conversions={self.conversions!r} is not allowed: must be an "
                              "integer in 1..1e7")
+        if not (isinstance(self.headroom_steps, int) and 0 <= self.headroom_steps <= 40):
+            raise ValueError(f"headroom_steps={self.headroom_steps!r} is not allowed: must "
+                             "be an integer in 0..40")
 
     @property
     def n_ranges(self) -> int:
@@ -80,7 +88,13 @@ class Digitiser:
     def tops(self) -> tuple[float, ...]:
         """The ranges' full scales, most sensitive first [output unit]."""
         return tuple(self.full_scale * self.step_ratio ** -j
-                     for j in range(self.n_ranges - 1, -1, -1))
+                     for j in range(self.n_ranges - 1, -self.headroom_steps - 1, -1))
+
+    @property
+    def saturation(self) -> float:
+        """The output at which the least sensitive range clips: ``full_scale`` with
+        the detector's gain turned down its ``headroom_steps`` [output unit]."""
+        return self.full_scale * self.step_ratio ** self.headroom_steps
 
     def range_of(self, clean) -> np.ndarray:
         """Full scale of the range the gain control picks for ``clean`` [output unit]:

@@ -296,17 +296,17 @@ def test_a_distance_the_shipped_kkl_does_not_serve_is_warned_about_and_flagged(t
     assert json.loads((tmp_path / "near" / "results.json").read_text())["distance_served"]
 
 
-def test_a_receiver_that_saturates_at_the_distance_is_warned_about(tmp_path):
-    # bluecomm-200's PMT: 1.02 uW at its peak at 9 m in coastal water, over its 1 uW full
-    # scale (the estimators then read phi 0.03 rad off); 0.2 uW at 20 m.
+def test_a_receiver_that_saturates_at_the_distance_is_refused(tmp_path):
+    # bluecomm-200's PMT, its gain turned down 1024x: its peak fills the scale under
+    # 0.57 m in coastal water (docs/saturation.md); 9 m, once clipped, no longer does.
     common = ("--link", "bluecomm-200", "--water", "coastal", "--seeds", "1", "--seconds",
               "0.2", "--workers", "1", "--no-plot", "-q")
-    r = run_cli("run", *common, "--distance", "9", "--out", str(tmp_path / "near"))
-    assert r.returncode == 0, r.stderr
-    assert "saturates at --distance 9" in r.stderr and "1e-06 W" in r.stderr
-    assert json.loads((tmp_path / "near" / "results.json").read_text())[
-        "receiver_saturates"] is True
-    r = run_cli("run", *common, "--distance", "20", "--out", str(tmp_path / "far"))
+    r = run_cli("run", *common, "--distance", "0.5", "--out", str(tmp_path / "near"))
+    assert r.returncode == 2 and len(r.stderr.strip().splitlines()) == 1, r.stderr
+    assert "saturates at --distance 0.5" in r.stderr and "0.00102 W" in r.stderr
+    assert "keep the range over 0.57 m" in r.stderr
+    assert "Traceback" not in r.stderr and not (tmp_path / "near").exists()
+    r = run_cli("run", *common, "--distance", "9", "--out", str(tmp_path / "far"))
     assert r.returncode == 0 and "saturates" not in r.stderr
     assert json.loads((tmp_path / "far" / "results.json").read_text())[
         "receiver_saturates"] is False

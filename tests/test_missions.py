@@ -93,7 +93,7 @@ def test_a_seed_flying_a_mission_is_the_same_in_a_batch(tmp_path):
         assert b.metrics.hull_error_rms == one.metrics.hull_error_rms
 
 
-def test_the_command_line_refuses_a_mission_into_the_led_and_warns_of_clipping(tmp_path):
+def test_the_command_line_refuses_a_mission_into_the_led_or_into_clipping(tmp_path):
     into = _file(tmp_path, '{"waypoints": [{"x": 29.8, "y": 0.0, "speed": 1.0}]}')
     r = run_cli("run", "--mission", into, "--distance", "30", "--out", str(tmp_path / "o"))
     assert r.returncode == 2 and len(r.stderr.strip().splitlines()) == 1, r.stderr
@@ -101,16 +101,25 @@ def test_the_command_line_refuses_a_mission_into_the_led_and_warns_of_clipping(t
     r = run_cli("run", "--mission", _file(tmp_path, DOCK), "--no-station-keeping",
                 "--out", str(tmp_path / "o"))
     assert r.returncode == 2 and "drop --no-station-keeping" in r.stderr
-    close = _file(tmp_path, 'waypoints = [{x = 25.0, y = 0.0, speed = 1.0}]', ".toml")
-    spec = RunSpec(link="bluecomm-200", water="coastal", distance=30.0, mission=close)
+    # bluecomm-200 behind a 10 deg lens in coastal water fills its PMT's scale (its gain
+    # turned all the way down) under 1.46 m: a mission to 1.2 m is refused, 2 m is flown
+    close = _file(tmp_path, 'waypoints = [{x = 28.8, y = 0.0, speed = 1.0}]', ".toml")
+    spec = RunSpec(link="bluecomm-200", water="coastal", distance=30.0, mission=close,
+                   lens_field_deg=10.0)
     distance, when = saturation_onset(spec)
-    assert 8.5 < distance < 9.5 and when == pytest.approx(30.0 - distance, abs=0.15)
-    r = run_cli("run", "--link", "bluecomm-200", "--water", "coastal", "--distance", "30",
-                "--mission", close, "--estimator", "oracle", "--seconds", "2", "--seeds",
-                "1", "--no-plot", "--out", str(tmp_path / "b"))
+    assert 1.4 < distance < 1.5 and when == pytest.approx(30.0 - distance, abs=0.15)
+    lens = ("--link", "bluecomm-200", "--water", "coastal", "--distance", "30",
+            "--lens-field-deg", "10", "--estimator", "oracle", "--seeds", "1", "--no-plot")
+    r = run_cli("run", *lens, "--mission", close, "--out", str(tmp_path / "b"))
+    assert r.returncode == 2 and len(r.stderr.strip().splitlines()) == 1, r.stderr
+    assert "saturates from 1.4" in r.stderr and "keep the range over 1.4" in r.stderr
+    assert not (tmp_path / "b").exists()
+    safe = _file(tmp_path, 'waypoints = [{x = 28.0, y = 0.0, speed = 1.0}]', ".toml")
+    r = run_cli("run", *lens, "--mission", safe, "--seconds", "2", "--out",
+                str(tmp_path / "b"))
     assert r.returncode == 0, r.stderr
     res = json.loads((tmp_path / "b" / "results.json").read_text())
-    assert res["spec"]["mission"] == close
+    assert res["spec"]["mission"] == safe and res["receiver_saturates"] is False
 
 
 def test_a_mission_under_an_led_at_another_depth_measures_the_slant_range(tmp_path):

@@ -31,39 +31,13 @@ def _check_vehicle(cfg) -> None:
                 "keeping (the hull drifts with the water)")
 
 
-def _warn_saturated(cfg) -> None:
-    """Say so when the receiver saturates anywhere along the run's path (at its
-    distance, or where the transmitter's drift brings it): its peak power reaches the
-    full scale of its digitiser, so the aligned samples clip there, and the estimators,
-    whose model has no clipping, read a clipped pair of powers as an angle off the peak
-    (a biased phi)."""
-    from ledsim.loop.path_range import saturation_onset
-    from ledsim.radiometry.optics import peak_power
-
-    onset = saturation_onset(cfg)
-    if onset is None:
-        return
-    distance, t = onset
-    c = cfg.world_config(distance=distance if t else None).constants
-    peak, digitiser = peak_power(c), c.measurement_noise(cfg.noise_scale).digitiser
-    where = f"at --distance {cfg.distance:g}" if t == 0.0 else \
-        f"from {distance:.1f} m on, {t:.1f} s into the run (along its path)"
-    log.warning(f"the receiver saturates {where}: its peak power "
-                f"{peak:.3g} W reaches its digitiser's full scale of "
-                f"{digitiser.full_scale:.3g} W, so aligned samples clip and the "
-                "estimators (whose model does not clip) misread phi: expect a biased "
-                "or lost estimate; a longer distance or murkier water keeps it in "
-                "range (results.json: receiver_saturates true)")
-
-
 def _warn_unserved(cfg) -> None:
     """Say so when the shipped KKL runs at a distance it is not measured to serve, when
-    the link is too weak for the minimum-time acquisition it asks for, and when the
-    receiver saturates (:func:`_warn_saturated`)."""
+    the link is too weak for the minimum-time acquisition it asks for (a receiver that
+    saturates is refused: ``loop/path_range.py:check_saturation``)."""
     from ledsim.loop.build.estimation import SERVED_DISTANCES, served
     from ledsim.loop.registry import PHYSICS_SCENARIOS
 
-    _warn_saturated(cfg)
     _warn_out_of_plane(cfg)
 
     if not served(cfg):

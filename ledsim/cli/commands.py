@@ -13,7 +13,7 @@ import time
 from pathlib import Path
 
 from ledsim.cli.budget_cmd import budget  # noqa: F401 (the budget command)
-from ledsim.cli.checks import _check_vehicle, _say_head, _warn_saturated, _warn_unserved
+from ledsim.cli.checks import _check_vehicle, _say_head, _warn_unserved
 from ledsim.cli.export_cmd import export  # noqa: F401 (the export command)
 from ledsim.cli.groups import resolved_distance
 from ledsim.cli.replay_cmd import replay  # noqa: F401 (the replay command)
@@ -139,7 +139,6 @@ def demo(args) -> int:
     _check_vehicle(cfgs[0])
     if not args.no_video:
         check_video(_demo_video_config(args.scene, spec_values(args, VEHICLE)), VideoSpec())
-    _warn_saturated(cfgs[0])
     with output_folder(out) as tmp:
         for est, cfg in zip(estimators, cfgs, strict=True):
             summary, trace = run_many(cfg, progress=not args.quiet)

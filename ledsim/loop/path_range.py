@@ -2,16 +2,19 @@
 
 The range is the configured distance changed by the vehicle's mission (``--mission``)
 and the transmitter's drift along the link (``transmitter:drift=V,drift_until=T``):
-d(t) = d + sum of V min(t, T). A run whose
-range closes can reach the distance at which the receiver's peak power fills its
-digitiser's full scale from a start well outside it (bluecomm-200 in coastal water
-clips from 9.0 m on, 42 s into a closing from 30 m at 0.5 m/s).
+d(t) = d + sum of V min(t, T). A run whose range closes can reach the distance at which
+the receiver's peak power fills its digitiser's scale, with the detector's gain turned
+all the way down, from a start well outside it. Such a run is refused before it starts
+(:func:`check_saturation`): the estimators' model does not clip. (Before the detectors'
+gain control, bluecomm-200 in coastal water clipped from 9.0 m on, 42 s into a closing
+from 30 m at 0.5 m/s; with it, no preset's bare detector clips down to 1 m.)
 """
 
 from __future__ import annotations
 
 import numpy as np
 
+from ledsim.errors import LedsimError
 from ledsim.physics.disturbances import TransmitterMotion, parse_disturbance
 from ledsim.physics.scene import transmitter_rise
 from ledsim.radiometry.link_presets import link_constants
@@ -58,9 +61,41 @@ def saturation_onset(cfg) -> tuple[float, float] | None:
         return None
     if _saturates_at(cfg, float(d[0])):
         return float(d[0]), 0.0
-    lo, hi = float(d[near]), float(d[0])  # saturates at lo, not at hi
+    lo = _threshold(cfg, float(d[near]), float(d[0]))
+    first = int(np.argmax(d <= lo))
+    return lo, float(t[first])
+
+
+def _threshold(cfg, lo: float, hi: float) -> float:
+    """The range [m] under which the receiver saturates, between ``lo`` (where it does)
+    and ``hi`` (where it does not), by bisection (the peak power falls with range)."""
     for _ in range(40):
         mid = 0.5 * (lo + hi)
         lo, hi = (mid, hi) if _saturates_at(cfg, mid) else (lo, mid)
-    first = int(np.argmax(d <= lo))
-    return lo, float(t[first])
+    return lo
+
+
+def check_saturation(cfg) -> None:
+    """Refuse a run whose receiver saturates anywhere along its path (at its distance,
+    or where its mission or the transmitter's drift brings it), naming where: its peak
+    power fills the digitiser's scale with the detector's gain turned all the way down
+    (``Digitiser.saturation``), so the aligned samples clip, and the estimators, whose
+    model has no clipping, would read a clipped set of powers as an angle off the
+    peak."""
+    onset = saturation_onset(cfg)
+    if onset is None:
+        return
+    from ledsim.radiometry.optics import peak_power
+
+    distance, t = onset
+    # the range it must keep: where the saturation starts (beyond the start, if there)
+    keep = _threshold(cfg, distance, 10.0 * distance + 10.0) if t == 0.0 else distance
+    c = link_constants(cfg.link, distance, cfg.water, cfg.attenuation,
+                       lens_field=cfg.world.lens_field)
+    top = c.measurement_noise(cfg.noise_scale).digitiser.saturation
+    where = f"at --distance {cfg.distance:g}" if t == 0.0 else \
+        f"from {distance:.2f} m on, {t:.1f} s into the run (along its path)"
+    raise LedsimError(f"the receiver of --link {cfg.link} saturates {where}: its peak "
+                      f"power {peak_power(c):.3g} W fills its scale of {top:.3g} W (its "
+                      f"detector's gain turned all the way down), so its samples would "
+                      f"clip: keep the range over {keep:.2f} m")

@@ -167,6 +167,9 @@ def validate_run(cfg) -> None:
     keeping_gains(cfg.station_keeping_gains)
     if cfg.mission is not None:
         _check_mission(cfg)
+    from ledsim.loop.path_range import check_saturation
+
+    check_saturation(cfg)
     world = cfg.world_config()
     snr = peak_snr(world.constants, cfg.noise_scale)
     if not snr >= MIN_RUN_PEAK_SNR:

@@ -152,22 +152,34 @@ class ReceiverOptics:
 
 
 _S8664 = ("Hamamatsu S8664-1010 class Si APD datasheet (10 mm diameter, 0.24 A/W at "
-          "M = 1 and 420 nm, M = 50, excess-noise index 0.2: F = 50^0.2)")
+          "M = 1 and 420 nm, M = 50, excess-noise index 0.2: F = 50^0.2; the reverse "
+          "bias sets M from 50 down to a few)")
 _S3590 = ("Hamamatsu S3590-08 class Si PIN datasheet (10 x 10 mm, about 0.3 A/W at "
           "470 nm)")
 _H10721 = ("Hamamatsu H10721-210 class PMT module datasheet (8 mm photocathode, about "
-           "0.1 A/W cathode sensitivity at 450 nm, gain 2e6, F about 1.3)")
+           "0.1 A/W cathode sensitivity at 450 nm, gain 2e6, F about 1.3; the control "
+           "voltage turns the gain down about three decades)")
 
 #: Conversions averaged into one pointing sample: an ADC at 1 MS/s over the 10 ms
 #: control period (the modem's receiver digitises the data at that rate).
 CONVERSIONS = 10_000
 
+#: The detector's own gain turned down above the ADC's ranges, in 6 dB steps (the
+#: receiver's headroom close in, ``Digitiser.headroom_steps``): a PMT's control voltage
+#: about three decades (2^10), an APD's bias from M = 50 to about 3 (2^4); a PIN has no
+#: gain to turn (and never fills its scale: aquaoptical's peak at 1 m is 3 % of it).
+#: Enough that no preset's bare detector clips down to 1 m in any water
+#: (``scripts/saturation_ranges.py``).
+PMT_HEADROOM, APD_HEADROOM = 10, 4
+
 #: Representative detectors (the makers of the modems do not publish their parts).
 DETECTORS = {
     "si-apd": Detector("apd", math.pi * 0.005**2, 0.24, 50.0, 50.0**0.2, 1e-10, 2e-12,
-                       Digitiser(12, 1e-4, 8, conversions=CONVERSIONS), _S8664),
+                       Digitiser(12, 1e-4, 8, conversions=CONVERSIONS,
+                                 headroom_steps=APD_HEADROOM), _S8664),
     "si-pin": Detector("pin", 1e-4, 0.3, 1.0, 1.0, 2e-9, 2e-12,
                        Digitiser(12, 1e-2, 8, conversions=CONVERSIONS), _S3590),
     "pmt": Detector("pmt", math.pi * 0.004**2, 0.1, 2e6, 1.3, 5e-15, 10e-12,
-                    Digitiser(12, 1e-6, 8, conversions=CONVERSIONS), _H10721),
+                    Digitiser(12, 1e-6, 8, conversions=CONVERSIONS,
+                              headroom_steps=PMT_HEADROOM), _H10721),
 }

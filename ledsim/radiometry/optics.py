@@ -143,9 +143,10 @@ def peak_power(c: LinkConstants) -> float:
 def receiver_saturates(c: LinkConstants, noise_scale: float = 1.0) -> bool:
     """Whether the receiver saturates at the configured distance: the largest power one
     photodiode can see there (:func:`peak_power`) reaches the full scale of its
-    digitiser (False without one: the paper's bench), so aligned samples clip."""
+    digitiser with its detector's gain turned down (``Digitiser.saturation``; False
+    without one: the paper's bench), so aligned samples clip."""
     digitiser = c.measurement_noise(noise_scale).digitiser
-    return digitiser is not None and peak_power(c) >= digitiser.full_scale
+    return digitiser is not None and peak_power(c) >= digitiser.saturation
 
 
 def nominal_noise_std(c: LinkConstants) -> float:
