@@ -290,7 +290,7 @@ def test_a_distance_the_shipped_kkl_does_not_serve_is_warned_about_and_flagged(t
     assert "outside the 0.05-0.3 m" in r.stderr
     assert json.loads((tmp_path / "far" / "results.json").read_text())[
         "distance_served"] is False
-    r = run_cli("run", "--distance", "0.2", "--seeds", "1", "--seconds", "1", "--workers",
+    r = run_cli("run", "--distance", "0.5", "--seeds", "1", "--seconds", "1", "--workers",
                 "1", "--no-plot", "-q", "--out", str(tmp_path / "near"))
     assert r.returncode == 0 and "outside" not in r.stderr
     assert json.loads((tmp_path / "near" / "results.json").read_text())["distance_served"]

@@ -22,6 +22,14 @@ mode            what the head does
                 then spirals around it (:class:`~ledsim.agent.spiral.SpiralScan`);
                 the beam seen again is a fix and an acquisition
 ==============  =============================================================
+
+On a vehicle that moves, its navigation tells the supervisor where the node is each
+step (:attr:`HeadSupervisor.cue`, in the same encoder angles; None: a station, as
+above; :mod:`ledsim.agent.node_aim`). While acquiring, the fixes' target moves as the
+cue has moved since; otherwise the head looks at the cue, and while it cannot see the
+LED it stares there rather than spiralling: a node whose position is known and whose
+LED is out of its beam (a fly-by before the beam, a survey's far lanes) is where the
+light will come from. A fix or an estimate far from the cue is not the LED.
 """
 
 from __future__ import annotations
@@ -32,9 +40,15 @@ from collections import deque
 import numpy as np
 
 from ledsim.agent.axes import angles_rates, magnitude
+from ledsim.agent.node_aim import NodeAim
 from ledsim.agent.pan_tilt import to_encoder, to_head
 from ledsim.agent.spiral import SpiralScan
 from ledsim.agent.step import Decision
+
+#: The least the data detector must read, in the noise's standard deviations, for the
+#: beam to count as seen, and under which it counts as gone: a node far out of its
+#: beam, whose model's peak is under the noise, is not fixed on the noise.
+SEEN_SIGMAS, DARK_SIGMAS = 6.0, 3.0
 
 
 class HeadSupervisor:
@@ -49,7 +63,9 @@ class HeadSupervisor:
         reference: the data detector's index among the powers.
         Te: the control period [s].
         seen_level, dark_level: the data detector's share of ``peak`` at which the beam
-            counts as seen (a fix is taken) and as gone [-].
+            counts as seen (a fix is taken) and as gone [-], but never under
+            :data:`SEEN_SIGMAS` and :data:`DARK_SIGMAS` times ``floor``.
+        floor: the noise's standard deviation without a signal [W] (0: none).
         loss_time: how long the data detector stays dark before the link is lost [s].
         patience: how long a lost head waits where the LED was before it scans [s].
         arrive_tol, arrive_rate: an acquisition arrives within this angle [rad] of the
@@ -57,10 +73,8 @@ class HeadSupervisor:
         reslew: a tracked estimate this far off the boresight [rad], or this far from
             the fix, is slewed to ...
         reslew_time: ... when it stays so for this long [s], each step counted by how
-            many ``reslew`` it is off (one sample's fix carries the noise and the
-            photodiodes' own fading: 0.03 rad rms, 0.1 at worst, in scintillation at half
-            the FEC range;
-            a kick's estimate left behind is off by more at once).
+            many ``reslew`` it is off (a fix's noise and fading in scintillation at half
+            the FEC range: 0.03 rad rms, 0.1 at worst; a kick's is more at once).
         fit_fixes: how many of the last fixes the LED's direction and turn are fitted
             to while acquiring (a straight line in time, by least squares).
     """
@@ -69,11 +83,12 @@ class HeadSupervisor:
                  seen_level: float = 0.05, dark_level: float = 0.02,
                  loss_time: float = 0.05, patience: float = 0.5,
                  arrive_tol: float = 0.005, arrive_rate: float = 0.3, reslew: float = 0.1,
-                 reslew_time: float = 0.05, fit_fixes: int = 8):
+                 reslew_time: float = 0.05, fit_fixes: int = 8, floor: float = 0.0):
         self.estimator, self.axes, self.slew = estimator, list(axes), slew
         self.peak, self.reference, self.Te = float(peak), int(reference), Te
-        self.seen = seen_level * self.peak
-        self.dark = dark_level * self.peak
+        self._levels = (seen_level * self.peak, dark_level * self.peak)
+        self._floors, self.node = (SEEN_SIGMAS * floor, DARK_SIGMAS * floor), NodeAim(Te)
+        self.tell_gain(1.0)
         self.loss_steps = max(1, int(round(loss_time / Te)))
         self.patience_steps = int(round(patience / Te))
         self.arrive_tol, self.arrive_rate, self.reslew = arrive_tol, arrive_rate, reslew
@@ -95,9 +110,14 @@ class HeadSupervisor:
     #: The powers reach the estimator as they are (the quad's ratios need no gain).
     gain_ratio = 1.0
 
-    @property
-    def outside_domain(self) -> bool:
-        return self.estimator.outside_domain
+    def tell_gain(self, gain: float) -> None:
+        """The link's gain is ``gain`` times the model's now [-] (a vehicle on the move:
+        ``agent/range_gain.py``): the levels at which the beam is seen and gone follow,
+        above the noise's."""
+        self.seen, self.dark = (max(level * gain, floor) for level, floor in
+                                zip(self._levels, self._floors, strict=True))
+
+    outside_domain = property(lambda self: self.estimator.outside_domain)
 
     # -- what the powers say ---------------------------------------------------------
 
@@ -107,20 +127,44 @@ class HeadSupervisor:
         if not (math.isfinite(p0) and p0 >= self.seen):
             return None
         angles = [a.fix(y) for a in self.axes]
-        return None if any(v is None for v in angles) else np.array(angles)
+        if any(v is None for v in angles):
+            return None
+        angles = np.array(angles)
+        if self.node.off(self._q + to_encoder(angles, self._q)):
+            return None  # far from where the navigation puts the node: a shaded quad
+        return angles
 
     def _is_dark(self, y: np.ndarray) -> bool:
         p0 = y[self.reference]
         return not math.isfinite(p0) or p0 < self.dark
 
+    @property
+    def cue(self) -> np.ndarray | None:
+        """Where the navigation puts the LED now, in encoder angles [rad] (told each
+        step on the move; None: a station)."""
+        return self.node.cue
+
+    @cue.setter
+    def cue(self, value) -> None:
+        self.node.cue = value
+
+    def _aim(self) -> np.ndarray | None:
+        return self.node.aim(self.target, self.mode == "acquiring")
+
+    def _set_target(self, target: np.ndarray) -> None:
+        self.target = target
+        self.node.target_set()
+
     def _carried(self, q: np.ndarray, qdot: np.ndarray) -> np.ndarray:
-        """The estimate carried on the encoder: the LED where it was last seen."""
-        return np.r_[to_head(self.target - q, q), -to_head(qdot, q)]
+        """The estimate carried on the encoder: the LED where it was last seen (moved
+        with the cue)."""
+        return np.r_[to_head(self._aim() - q, q), -to_head(qdot, q)]
 
     # The slew's and the scan's inputs per hinge, in the head's frame (the motor turns
     # them back: agent/pan_tilt.py).
     def _slew(self, q: np.ndarray, qdot: np.ndarray) -> np.ndarray:
-        return to_head(self.slew.command(q, qdot, self.target), q)
+        return to_head(self.slew.command(q, qdot, self._aim(), target_rate=self.node.rate),
+                       q)
 
     def _scan(self, q: np.ndarray, qdot: np.ndarray) -> np.ndarray:
         return to_head(self.spiral.command(q, qdot), q)
@@ -129,6 +173,7 @@ class HeadSupervisor:
 
     def step(self, t: float, y: np.ndarray, q, qdot) -> Decision:
         self._updated, self._k = False, self._k + 1
+        self.node.observe()
         y = np.asarray(y, dtype=float)
         q, qdot = np.asarray(q, dtype=float), np.asarray(qdot, dtype=float)
         self._q = q
@@ -140,13 +185,14 @@ class HeadSupervisor:
             # The LED's direction in the encoder's terms, and its turn, fitted to the
             # last fixes (one fix carries the noise and the fading: docs/two_axes.md)
             self._seen.append((self._k, q + to_encoder(fix, q)))
-            self.target, self._turn = self._fitted()
+            target, self._turn = self._fitted()
+            self._set_target(target)
             fix = to_head(self.target - q, q)
             self.spiral.stop()
             if self.mode == "lost" and magnitude(fix) <= self.reslew:
                 return self._restart(fix, y, qdot, "reacquired")
             self.mode = "acquiring"
-            if magnitude(fix) < self.arrive_tol and magnitude(qdot) < self.arrive_rate:
+            if magnitude(fix) < self.arrive_tol and self.node.settled(qdot, self.arrive_rate):
                 return self._restart(fix, y, qdot, "acquired")
             # The beam is in view: the fix is the estimate, and the link stands.
             return Decision(np.r_[fix, -to_head(qdot, q)], False, True, self._slew(q, qdot),
@@ -161,6 +207,9 @@ class HeadSupervisor:
                             reason="acquiring")
         self._blind_steps = 0
         xhat = self._update(y)
+        if self.target is None and self.cue is not None:  # look where the node is
+            self.mode = "lost"
+            return Decision(xhat, True, True, self._slew(q, qdot), reason="cued")
         if self.target is None:  # nothing seen yet: scan around where the head looks
             if not self.spiral.active:
                 self.spiral.start(q)
@@ -173,11 +222,12 @@ class HeadSupervisor:
         if self.spiral.active:
             return Decision(xhat, True, True, self._scan(q, qdot), reason="scanning",
                             held=held, held_std=self._std)
-        if magnitude(self.target - q) > self.arrive_tol or magnitude(qdot) > self.arrive_rate:
+        if magnitude(self._aim() - q) > self.arrive_tol or \
+                not self.node.settled(qdot, self.arrive_rate):
             self._waited = 0  # back to where the LED was first
         else:
             self._waited += 1
-            if self._waited > self.patience_steps:
+            if self._waited > self.patience_steps and self.cue is None:
                 self.spiral.start(self.target)
         return Decision(xhat, True, True, self._slew(q, qdot), reason="waiting", held=held,
                         held_std=self._std)
@@ -189,9 +239,16 @@ class HeadSupervisor:
     def _track(self, y: np.ndarray, q: np.ndarray, qdot: np.ndarray) -> Decision:
         xhat = self._update(y)
         angles, _ = angles_rates(xhat)
+        if self.node.off(q + to_encoder(angles, q)):
+            # on the move, an estimate far from where the navigation puts the node (a
+            # beam's edge at a few noise deviations): lost, back to the cue
+            self.mode, self._waited = "lost", 0
+            self._seen.clear()
+            return Decision(xhat, True, True, self._slew(q, qdot), reason="off cue",
+                            held=self._carried(q, qdot), held_std=self._std)
         if not self._is_dark(y):
             self._dark_steps = 0
-            self.target = q + to_encoder(angles, q)
+            self._set_target(q + to_encoder(angles, q))
             self._std = getattr(self.estimator, "std", None)
             fix = self._fix(y)
             # Far off the boresight (a kick), or far from what the powers say (an

@@ -54,12 +54,16 @@ class HeadControlStep(ControlStep):
       LED after the hull has turned;
     - on a moving vehicle (``range_gain``: :class:`~ledsim.agent.range_gain.RangeGain`)
       the filters' model is told the gain at the range the navigation knows
-      (:meth:`tell_range`).
+      (:meth:`tell_range`), and the supervisor where the navigation puts the node
+      (:meth:`tell_cue`; ``home``: the encoder angles that looked at it at the start).
     """
 
-    def __init__(self, *args, axes=None, range_gain=None, **kwargs):
+    def __init__(self, *args, axes=None, range_gain=None, level_gain=None, home=None,
+                 **kwargs):
         super().__init__(*args, **kwargs)
-        self.range_gain = range_gain
+        self.range_gain, self.level_gain = range_gain, level_gain
+        self._anchored = False
+        self.home = None if home is None else np.asarray(home, dtype=float).copy()
         limit = getattr(self.actuator, "u_limit", None)
         self.loads = None if axes is None else [
             LoadObserver(m, max_load=None if limit is None else float(lim))
@@ -67,10 +71,28 @@ class HeadControlStep(ControlStep):
         self._turned = np.zeros(2)  # the hull's turn about each hinge since the start
         self._motor_enc = np.zeros(2)  # the encoders' u the motors gave last step
 
-    def tell_range(self, r: float) -> None:
-        """The vehicle's navigation puts the LED ``r`` [m] away now."""
+    def tell_range(self, r: float, theta: float | None = None) -> None:
+        """The vehicle's navigation puts the LED ``r`` [m] away now (and sees it at the
+        emission angle ``theta`` [rad], when it knows the LED's axis): the filters'
+        gain, and the supervisor's levels, follow."""
         if self.range_gain is not None:
-            self.range_gain.tell(r)
+            self.range_gain.tell(r, theta)
+        if self.level_gain is not None and hasattr(self.supervisor, "tell_gain"):
+            self.supervisor.tell_gain(self.level_gain.factor(r, theta))
+
+    def tell_node(self, view) -> None:
+        """What the navigation says of the node now (a
+        :class:`~ledsim.agent.node_cue.NodeView`): the supervisor's cue, in its inertial
+        encoder angles (the start's look plus the LED's turn), and the gains at its
+        range and emission angle (both anchored at the first view's)."""
+        if not self._anchored:
+            for g in (self.range_gain, self.level_gain):
+                if g is not None:
+                    g.anchor(view.range, view.emission_angle)
+            self._anchored = True
+        if self.home is not None and hasattr(self.supervisor, "cue"):
+            self.supervisor.cue = self.home + np.asarray(view.change, dtype=float)
+        self.tell_range(view.range, view.emission_angle)
 
     def __call__(self, y, t, q=0.0, qdot=0.0, los=None):
         act = self.actuator

@@ -77,13 +77,16 @@ class TimeOptimalSlew:
                              error)
 
     def command(self, q: float, qdot: float, target: float,
-                max_rate: float = math.inf) -> float:
+                max_rate: float = math.inf, target_rate=None) -> float:
         """The input u = phi'' [rad/s^2] (phi = phi_home - q, so q'' = -u) towards
         encoder angle ``target`` [rad] from angle ``q`` [rad] and rate ``qdot`` [rad/s],
-        no faster than ``max_rate`` [rad/s], within the torque limit."""
+        no faster than ``max_rate`` [rad/s], within the torque limit; a target that
+        moves at ``target_rate`` [rad/s] has its rate added (None: it stands)."""
         ahead = target - q - qdot * self.Te  # the error one step from now, coasting
         want = self.rate_reference(ahead)
         want = clip(want, -max_rate, max_rate)
+        if target_rate is not None:
+            want = want + target_rate
         u = (qdot - want) / self.Te
         return clip(u, -self.u_limit, self.u_limit)
 

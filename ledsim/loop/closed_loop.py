@@ -21,6 +21,7 @@ import numpy as np
 from tqdm.auto import tqdm
 
 from ledsim.agent.head_supervisor import HeadSupervisor
+from ledsim.agent.node_cue import NodeCue
 from ledsim.agent.supervisor import LinkSupervisor
 from ledsim.experiment.montecarlo import report_progress
 from ledsim.loop.build import SeedRun, build_run
@@ -79,8 +80,12 @@ class LoopRun:
         self.station = None if v is None else np.r_[v.home[0], v.surface]
         # a mission's station moves: its target each step (the hull's error is from it)
         self.moving = v is not None and v.paths[0] is not None
+        self.cue = None  # where the navigation puts the node (a pan-tilt on the move)
         if self.moving:
             self.station = np.tile(self.station, (steps, 1))
+            if self.axes == 2 and hasattr(self.step, "tell_node"):
+                self.cue = NodeCue(self.world.led_pos, self.world.led_rotation[:, 2],
+                                   self.world.gimbal_in_hull(), v.navigation)
         self.spent = 0.0  # s in the control step
 
     def control(self, k: int, t: float, reading: SensorReading | None = None) -> float:
@@ -103,8 +108,8 @@ class LoopRun:
             self.navigated[k] = self.vehicle.navigated_position
             if self.moving:
                 self.station[k] = self.vehicle.target
-                if hasattr(self.step, "tell_range"):  # the pan-tilt's filters' gain
-                    self.step.tell_range(self.vehicle.range)
+                if self.cue is not None:  # the pan-tilt's cue, filters' gain and levels
+                    self.step.tell_node(self.cue.at(self.vehicle.navigation))
         t0 = time.perf_counter()
         los = None
         if self.aided:  # a pan-tilt head takes the gyro's three rates (agent/pan_tilt.py)

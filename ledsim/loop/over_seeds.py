@@ -61,7 +61,8 @@ def per_axis(outs: list[RunOutcome]) -> dict:
 
 
 #: What a run delivered, per seed (:class:`~ledsim.radiometry.goodput.Goodput`).
-DATA_KEYS = ("goodput_bits", "ideal_bits", "outages", "outage_s")
+DATA_KEYS = ("goodput_bits", "ideal_bits", "outages", "outage_s", "edge_goodput_bits",
+             "edge_ideal_bits")
 
 
 def data_delivered(outs: list[RunOutcome]) -> dict:

@@ -30,10 +30,11 @@ def range_path(cfg) -> tuple[np.ndarray, np.ndarray]:
     gimbal's hinge when the hull heads at it) and the transmitter's drift."""
     t = np.arange(0.0, cfg.run_seconds + PATH_STEP / 2, PATH_STEP)
     d = np.full(t.shape, float(cfg.distance))
-    if cfg.mission is not None:
-        from ledsim.agent.guidance import Mission, PathReference, led_in_start_frame
+    mission = cfg.mission_plan
+    if mission is not None:
+        from ledsim.agent.guidance import PathReference, led_in_start_frame
 
-        where = PathReference(Mission.from_file(cfg.mission), (0.0, 0.0), 0.0).positions(t)
+        where = PathReference(mission, (0.0, 0.0), 0.0).positions(t)
         rise = transmitter_rise(cfg.depth, cfg.transmitter_depth, cfg.distance)
         x, y = led_in_start_frame(cfg.distance, rise)
         d = np.sqrt((x - where[:, 0]) ** 2 + (y - where[:, 1]) ** 2 + rise ** 2)

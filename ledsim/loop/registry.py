@@ -7,6 +7,9 @@ align               start misaligned (phi0 = 0.3 rad); cascade PI control to the
 open-loop           start at phi0 = 0.3 rad; no input
 if1, if2            start aligned; the paper's input functions as u [rad/s^2]
 paper-closed-loop   start at 0.2 rad; the paper's u = -0.001 phidot_hat
+flyby, flyby-5,     the vehicle flies past a seabed node, docks, or surveys over
+flyby-15, dock,     it, under the alignment's control (physical links;
+survey              :mod:`ledsim.loop.mission_scenarios`)
 ==================  ==========================================================
 """
 
@@ -21,6 +24,7 @@ from ledsim.experiment.estimators import (
 )
 from ledsim.experiment.estimators import LOOP_ESTIMATORS as LOOP_ESTIMATORS
 from ledsim.experiment.scenario import Scenario
+from ledsim.loop.mission_scenarios import MISSION_SCENARIOS
 from ledsim.radiometry.optics import nominal_noise_std, peak_power
 
 PHYSICS_SCENARIOS = {
@@ -37,6 +41,12 @@ PHYSICS_SCENARIOS = {
                  description="start 0.2 rad off; u = -0.001 phidot_hat"),
     )
 }
+# The missions past a node: the alignment's law, the head pointed where the navigation
+# puts the node; their length is the path's and its hold (RunSpec.run_seconds).
+PHYSICS_SCENARIOS.update({
+    name: Scenario(name, (0.0, 0.0), AlignmentPID(), 10.0, 5.0, warmup=1.0,
+                   description=m.description)
+    for name, m in MISSION_SCENARIOS.items()})
 # LOOP_ESTIMATORS and COMPARED_ESTIMATORS are the estimator registry's
 # (ledsim.experiment.estimators), imported here where they were first defined.
 OMEGA_MODELS = ("identified", "simulator", "none")

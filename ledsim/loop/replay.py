@@ -202,7 +202,7 @@ def run_estimator(cfg: RunConfig):
     from ledsim.loop.build.estimation import identified_model, loop_estimator
     from ledsim.physics.gimbal_system import GimbalSystem
 
-    if cfg.mission is not None and cfg.world.two_axes and cfg.estimator != "kkl":
+    if cfg.mission_plan is not None and cfg.world.two_axes and cfg.estimator != "kkl":
         raise ReplayError("a pan-tilt filter flying a --mission follows the range each "
                           "step (agent/range_gain.py), which the trace does not keep: "
                           "its replay is not supported yet")

@@ -72,7 +72,9 @@ class RunSummary(DictAccess):
     ``goodput_bits`` the data bits delivered through the link's FEC code while the link
     was held, ``ideal_bits`` what the same path pointed perfectly delivers, ``outages``
     and ``outage_s`` [s] the stretches delivering under half the code's rate, and
-    ``range_m`` the range's [nearest, farthest] [m] (:mod:`ledsim.radiometry.goodput`)."""
+    ``range_m`` the range's [nearest, farthest] [m], and ``edge_goodput_bits`` and
+    ``edge_ideal_bits`` the two bit counts near the edge of the range the ideal
+    delivers at (:mod:`ledsim.radiometry.goodput`)."""
 
     scenario: str
     estimator: str
@@ -153,6 +155,8 @@ class RunSummary(DictAccess):
     outages: Stat | None = None
     outage_s: Stat | None = None
     range_m: list | None = None
+    edge_goodput_bits: Stat | None = None
+    edge_ideal_bits: Stat | None = None
 
 
 def summarize(cfg: RunConfig, outs: list[RunOutcome]) -> RunSummary:

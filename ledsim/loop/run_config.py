@@ -6,6 +6,7 @@ from __future__ import annotations
 from dataclasses import dataclass, fields, replace
 
 from ledsim.experiment.scenario import Scenario
+from ledsim.loop.mission_scenarios import MISSION_SCENARIOS, placed
 from ledsim.loop.registry import (  # noqa: F401 (aliases: the choices where ledsim 0.2 had them)
     ACQUISITIONS,
     COMPARED_ESTIMATORS,
@@ -150,6 +151,13 @@ class RunSpec:
             # a physical link's default head is the pan-tilt, but for what only the yaw
             # gimbal runs (every command before that default still runs as it did)
             object.__setattr__(self, "world", replace(w, gimbal="yaw"))
+        scenario = MISSION_SCENARIOS.get(self.task.scenario)
+        if scenario is not None and self.world.link != "paper":
+            # a mission past a node: the node where the scenario puts it, from 0.9 of
+            # the link's reach unless a distance is given (a part given gives its own)
+            given = world is not None or flat.get("distance") is not None
+            object.__setattr__(self, "world", placed(self.world, scenario, given,
+                                                     self.data_bit_rate))
 
     @classmethod
     def of(cls, world: WorldPart = WorldPart(), task: TaskPart = TaskPart(),  # noqa: B008
@@ -237,16 +245,38 @@ class RunSpec:
         enough to fly it and hold the last waypoint :data:`MISSION_HOLD`."""
         if self.seconds is not None:
             return self.seconds
+        mission = self.mission_plan
+        if mission is not None:
+            hold = self._plan.hold if self._plan is not None else MISSION_HOLD
+            return max(self.scenario_spec.seconds, mission.duration + hold)
+        return self.scenario_spec.seconds
+
+    @property
+    def mission_plan(self):
+        """The path the receiver's vehicle flies (:class:`~ledsim.agent.guidance.
+        Mission`): a mission scenario's, or the ``mission`` file's (None: it keeps
+        station)."""
+        if self._plan is not None:
+            return self._plan.mission
         if self.mission is not None:
             from ledsim.agent.guidance import Mission
 
-            return max(self.scenario_spec.seconds,
-                       Mission.from_file(self.mission).duration + MISSION_HOLD)
-        return self.scenario_spec.seconds
+            return Mission.from_file(self.mission)
+        return None
+
+    @property
+    def _plan(self):
+        """A mission scenario's node and path on a physical link (None: not one)."""
+        scenario = MISSION_SCENARIOS.get(self.scenario)
+        if scenario is None or self.link == "paper":
+            return None
+        return scenario.plan(self.distance, self.seconds)
 
     def world_config(self, distance: float | None = None) -> WorldConfig:
         """The MuJoCo world of the run (at ``distance`` [m] instead, when given)."""
-        return self.world.world_config(distance)
+        plan = self._plan
+        led = None if plan is None else (plan.led_yaw, plan.led_pitch)
+        return self.world.world_config(distance, led=led)
 
 
 def _flat_reader(part: str, name: str) -> property:

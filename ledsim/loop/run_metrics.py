@@ -100,6 +100,8 @@ class RunMetrics(DictAccess):
             perfectly delivers [bit], the outages after the first acquisition and their
             length [s], and the range's [nearest, farthest] [m]
             (:mod:`ledsim.radiometry.goodput`; None without a link budget).
+        edge_goodput_bits, edge_ideal_bits: those bits near the edge of the range the
+            ideal delivers at, where the data can be lost [bit].
     """
 
     rmse: dict
@@ -130,6 +132,8 @@ class RunMetrics(DictAccess):
     outages: int | None = None
     outage_s: float | None = None
     range_m: list | None = None
+    edge_goodput_bits: float | None = None
+    edge_ideal_bits: float | None = None
 
 
 def link_events(lost: np.ndarray, Te: float) -> list[list]:

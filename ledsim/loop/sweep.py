@@ -58,7 +58,7 @@ TIMING_COLUMNS = ("us_per_step", "realtime_factor")
 SPEC_COLUMNS = tuple(n for n in FLAT if n not in CELL_COLUMNS and n not in (
     "estimator", "disturbances", "distance", "noise_scale", "seeds", "workers"))
 #: What the run delivered (``range_m``: nearest;farthest), last: no column moves.
-DATA_COLUMNS = ("goodput_bits", "ideal_bits", "outages", "outage_s", "range_m")
+DATA_COLUMNS = ("goodput_bits", "ideal_bits", "outages", "outage_s", "range_m", "edge_goodput_bits", "edge_ideal_bits")  # noqa: E501
 COLUMNS = CELL_COLUMNS + METRIC_COLUMNS + TIMING_COLUMNS + SPEC_COLUMNS + DATA_COLUMNS
 
 
@@ -175,7 +175,7 @@ def run_cell(job: tuple[RunConfig, Cell]) -> dict:
            "received_power_w": m.mean_power, "loss_events": m.loss_events,
            "false_loss_events": m.false_loss_events, "reseeds": m.reseeds,
            "silent_error_share": m.silent_error_share, **{k: getattr(m, k) for k in
-           DATA_COLUMNS[:-1]}, "range_m": ";".join(f"{v:g}" for v in m.range_m or ())}
+           DATA_COLUMNS}, "range_m": ";".join(f"{v:g}" for v in m.range_m or ())}
     flat = cfg.flat()
     row.update({n: ";".join(flat[n]) if isinstance(flat[n], tuple) else flat[n]
                 for n in SPEC_COLUMNS})

@@ -21,6 +21,7 @@ from ledsim.errors import LedsimError, check_ranges
 from ledsim.experiment.estimators import LOOP_KKL_ESTIMATORS
 from ledsim.keyvalues import settings_of
 from ledsim.loop.head_validation import _check_lens, _check_two_axes
+from ledsim.loop.mission_scenarios import MISSION_SCENARIOS
 from ledsim.loop.registry import (
     ACQUISITIONS,
     FILTER_DISTANCES,
@@ -165,8 +166,10 @@ def validate_run(cfg) -> None:
                           f"{cfg.run_seconds:g}] s")
     navigation_noise(cfg.imu_noise)
     keeping_gains(cfg.station_keeping_gains)
-    if cfg.mission is not None:
-        _check_mission(cfg)
+    if cfg.mission is not None or cfg.scenario in MISSION_SCENARIOS:
+        from ledsim.loop.mission_checks import check_mission
+
+        check_mission(cfg)
     from ledsim.loop.path_range import check_saturation
 
     check_saturation(cfg)
@@ -263,23 +266,3 @@ def _describe(hint) -> str:
         return "a list of strings"
     return {float: "a number", int: "an integer", bool: "true or false", str: "a string",
             type(None): "null"}.get(hint, hint.__name__)
-
-
-#: The nearest a mission may bring the receiver's gimbal to the LED [m].
-MIN_MISSION_RANGE = 1.0
-
-
-def _check_mission(cfg) -> None:
-    """A mission is flown on the station keeping's thrusters, and keeps the hull off
-    the LED (:data:`MIN_MISSION_RANGE`)."""
-    from ledsim.agent.guidance import Mission, led_in_start_frame
-
-    mission = Mission.from_file(cfg.mission)
-    if not cfg.station_keeping:
-        raise LedsimError(f"--mission {cfg.mission!r} is flown by the station keeping's "
-                          "thrusters: drop --no-station-keeping")
-    rise = transmitter_rise(cfg.depth, cfg.transmitter_depth, cfg.distance)
-    r, x, y = mission.closest_approach(led_in_start_frame(cfg.distance, rise), rise)
-    if r < MIN_MISSION_RANGE:
-        raise LedsimError(f"--mission {cfg.mission!r} passes {r:.2f} m from the LED, at "
-                          f"({x:.2f}, {y:.2f}) m: at least {MIN_MISSION_RANGE:g} m")

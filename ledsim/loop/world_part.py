@@ -124,9 +124,11 @@ class WorldPart:
         half = 0.5 * self.channel_mismatch
         return (1.0, 1.0 + half, 1.0 - half, 1.0 + half, 1.0 - half)
 
-    def world_config(self, distance: float | None = None) -> WorldConfig:
-        """The MuJoCo world (at ``distance`` [m] instead, when given); its control period
-        Te is the link constants' (5 physics steps of 2 ms)."""
+    def world_config(self, distance: float | None = None,
+                     led: tuple[float, float] | None = None) -> WorldConfig:
+        """The MuJoCo world (at ``distance`` [m] instead, when given; ``led``: the LED's
+        axis turned by (yaw, pitch) [rad], a mission scenario's node); its control
+        period Te is the link constants' (5 physics steps of 2 ms)."""
         extra = {} if self.scene is None else {"xml": self.scene}
         d = self.distance if distance is None else distance
         constants = link_constants(self.link, d, self.water, self.attenuation,
@@ -135,6 +137,8 @@ class WorldPart:
             constants = replace(constants, receiver_layout=quad_layout(constants.dphi))
         if self.transmitter_aimed:
             extra["led_pitch"] = aimed_pitch(self.depth, self.transmitter_depth, d)
+        if led is not None:
+            extra["led_yaw"], extra["led_pitch"] = led
         return WorldConfig(constants=constants,
                            torque_limit=self.torque_limit, integrator=self.integrator,
                            depth=self.depth, transmitter_depth=self.transmitter_depth,

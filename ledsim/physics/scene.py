@@ -205,7 +205,7 @@ def build_spec(config: WorldConfig) -> mujoco.MjSpec:
     ahead = math.sqrt(c.distance**2 - rise**2)
     tx.pos = [centre[0] + ahead, centre[1] + config.led_lateral_offset, centre[2] + rise]
     if config.receiver_dome:  # the head turns in still water behind a window
-        spec.geom("gimbal_housing").fluid_ellipsoid = 0.0
+        shelter(spec, [spec.body("gimbal")] + [spec.body(a.name) for a in layout.axes[1:]])
     place_seabed(spec, config.sea_depth, config.depth, rise, WorldError)
     if c.link is not None:  # metres of water: a docking station, fog, a wider view
         apply_sea(spec, c.link.water_at_led.attenuation, centre, np.asarray(tx.pos),
@@ -223,6 +223,20 @@ def build_spec(config: WorldConfig) -> mujoco.MjSpec:
     if config.hull_mass is not None:
         spec.geom("hull").mass = config.hull_mass
     return spec
+
+
+def shelter(spec: mujoco.MjSpec, bodies) -> None:
+    """Keep the water's flow off ``bodies`` (a head in a dome). A body none of whose
+    geoms has a fluid shape takes MuJoCo's inertia-box fluid model, and an ellipsoid's
+    added mass turns it whatever its coefficients (the Munk moment: 17 mN m on the
+    housing abeam at 1 m/s), so each body's geoms lose their fluid shape and it gets one
+    massless 0.1 mm marker with the ellipsoid model and zero coefficients."""
+    for body in bodies:
+        for g in body.geoms:
+            g.fluid_ellipsoid = 0
+        body.add_geom(type=mujoco.mjtGeom.mjGEOM_SPHERE, size=[1e-4, 0, 0], density=0.0,
+                      contype=0, conaffinity=0, group=3, fluid_ellipsoid=1,
+                      fluid_coefs=[0.0] * 5)
 
 
 def set_buoyancy(m: mujoco.MjModel, auv: int, gimbal: int, water_density: float) -> None:

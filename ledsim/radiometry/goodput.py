@@ -39,6 +39,9 @@ CODE_N, CODE_T = 32767, 160
 CODE_K = CODE_N - 15 * CODE_T
 #: A step delivering under this share of the code's rate is in an outage [-].
 OUTAGE_SHARE = 0.5
+#: The farthest share of the range the ideal delivers over that counts as its edge
+#: (issue 49: a fly-by's first and last 20 % of range) [-].
+EDGE_SHARE = 0.2
 
 
 def _log_choose(k: np.ndarray) -> np.ndarray:
@@ -94,6 +97,11 @@ class Goodput:
             rate (:data:`OUTAGE_SHARE`) [-].
         outage_s: their total length [s].
         range_m: the range's span over the run, [nearest, farthest] [m].
+        edge_goodput_bits, edge_ideal_bits: the same two where the data can be lost,
+            near the edge of the range the ideal delivers at: the steps it delivers
+            at over half the code's rate whose range is in the farthest
+            :data:`EDGE_SHARE` of that span (a fly-by's first and last stretch of
+            link) [bit] (None without ranges).
     """
 
     goodput_bits: float
@@ -101,6 +109,8 @@ class Goodput:
     outages: int
     outage_s: float
     range_m: list
+    edge_goodput_bits: float | None = None
+    edge_ideal_bits: float | None = None
 
 
 def goodput(power, best, noise: MeasurementNoise, Te: float, bit_rate: float,
@@ -117,6 +127,13 @@ def goodput(power, best, noise: MeasurementNoise, Te: float, bit_rate: float,
     low[:start] = False  # the first acquisition is not an outage
     edges = np.diff(np.r_[0, low.astype(np.int8), 0])
     d = np.asarray(distance, float) if distance is not None else np.zeros(0)
+    edge = None
+    full = ideal >= OUTAGE_SHARE * bit_rate * Te * CODE_K / CODE_N  # the ideal delivers
+    if d.size and full.any():
+        near, far = float(d[full].min()), float(d[full].max())
+        at = full & (d >= far - EDGE_SHARE * (far - near))
+        edge = float(got[at].sum()), float(ideal[at].sum())
     return Goodput(float(got.sum()), float(ideal.sum()), int((edges == 1).sum()),
                    float(low.sum() * Te),
-                   [float(d.min()), float(d.max())] if d.size else [])
+                   [float(d.min()), float(d.max())] if d.size else [],
+                   *(edge or (None, None)))

@@ -120,10 +120,14 @@ def head_control_step(cfg: RunConfig, system: HeadSystem, model: HeadModel, seed
     spec = cfg.scenario_spec
     limit = system.config.torque_limit
     model = head_model(cfg, model)
-    range_gain = None
-    if cfg.mission is not None and cfg.estimator in ("ekf", "ukf", "pf"):
-        model = model.calibrated(model.channel_gains)  # its own: its gain moves
-        range_gain = RangeGain(model, cfg.distance, system.constants.attenuation)
+    range_gain = level_gain = None
+    if cfg.mission_plan is not None:  # on the move: gains at the navigation's range
+        c = system.constants
+        level_gain = RangeGain(None, cfg.distance, c.attenuation, order=c.lambertian_order)
+        if cfg.estimator in ("ekf", "ukf", "pf"):
+            model = model.calibrated(model.channel_gains)  # its own: its gain moves
+            range_gain = RangeGain(model, cfg.distance, c.attenuation,
+                                   order=c.lambertian_order)
     if cfg.estimator == "oracle":
         est = Oracle(system, truth)
     else:
@@ -135,8 +139,10 @@ def head_control_step(cfg: RunConfig, system: HeadSystem, model: HeadModel, seed
     slew = TimeOptimalSlew(model.inertia, limit, system.Te)
     if cfg.supervision and spec.law.tracks_beam:
         ref = system.constants.layout.reference
+        floor = (run_noise(cfg, system) if noise is None else noise).std
         supervisor = HeadSupervisor(est, [AxisRatioModel(model, a) for a in range(2)], slew,
-                                    float(model.h(np.zeros(4))[ref]), ref, system.Te)
+                                    float(model.h(np.zeros(4))[ref]), ref, system.Te,
+                                    floor=floor)
     elif cfg.fast_acquisition:  # the oracle's slew: its estimate is the truth
         supervisor = Unsupervised(est, slew, 0.0)
     else:
@@ -146,7 +152,7 @@ def head_control_step(cfg: RunConfig, system: HeadSystem, model: HeadModel, seed
     axes = [AxisRatioModel(model, a) for a in range(2)] if cfg.imu else None
     return HeadControlStep(dropout_gate(system.constants, supervisor), supervisor, spec.law,
                            system.constants, motor, spec.warmup, axes=axes,
-                           range_gain=range_gain)
+                           range_gain=range_gain, level_gain=level_gain, home=system.home)
 
 
 def dropout_gate(constants, supervisor) -> DropoutGate:

@@ -8,7 +8,6 @@ from typing import NamedTuple
 import numpy as np
 
 from ledsim.agent.autopilot import Vehicle
-from ledsim.agent.guidance import Mission
 from ledsim.loop.build.estimation import run_noise
 from ledsim.loop.run_config import RunConfig
 from ledsim.physics.disturbances import parse_disturbance
@@ -57,7 +56,6 @@ def start_world(cfg: RunConfig, system: GimbalSystem, world: LinkWorld, seed: in
         vehicle = Vehicle(world, system.Te, seed, cfg.distance, cfg.station_keeps,
                           noise=cfg.world.navigation_noise(),
                           gains=cfg.world.keeping_gains(),
-                          mission=None if cfg.mission is None else
-                          Mission.from_file(cfg.mission))
+                          mission=cfg.mission_plan)
     prepare(world, disturbances, world.time, vehicle)
     return Surroundings(sensor, disturbances, vehicle)
