@@ -44,6 +44,7 @@ import pytest
 from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
+import ledsim.cli.demo_cmd
 import ledsim.experiment.montecarlo
 import ledsim.files.results
 import ledsim.loop.report
@@ -316,7 +317,8 @@ def stubs(command: str) -> list[tuple[object, str, object]]:
                  (report, "write_run", lambda *a, **k: []),
                  (ledsim.loop.table, "format_summary", lambda *a, **k: "| row |"),
                  (ledsim.files.results, "write_json", lambda *a, **k: None),
-                 (video, "render_video", _started)],
+                 (video, "render_video", _started),
+                 (ledsim.cli.demo_cmd, "_delivered", lambda s: "a pass")],
     }.get(command, [])
 
 

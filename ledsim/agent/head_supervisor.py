@@ -75,8 +75,8 @@ class HeadSupervisor:
         reslew_time: ... when it stays so for this long [s], each step counted by how
             many ``reslew`` it is off (a fix's noise and fading in scintillation at half
             the FEC range: 0.03 rad rms, 0.1 at worst; a kick's is more at once).
-        fit_fixes: how many of the last fixes the LED's direction and turn are fitted
-            to while acquiring (a straight line in time, by least squares).
+        fit_fixes: how many of the last fixes the LED's direction and turn are fitted to
+            while acquiring (a least-squares line in time).
     """
 
     def __init__(self, estimator, axes, slew, peak: float, reference: int, Te: float,
@@ -107,8 +107,7 @@ class HeadSupervisor:
         self._seen: deque = deque(maxlen=fit_fixes)  # (step, target) of the last fixes
         self._turn: np.ndarray | None = None  # d(target)/dt from the fixes [rad/s]
 
-    #: The powers reach the estimator as they are (the quad's ratios need no gain).
-    gain_ratio = 1.0
+    gain_ratio = 1.0  # the powers reach the estimator as they are (ratios need no gain)
 
     def tell_gain(self, gain: float) -> None:
         """The link's gain is ``gain`` times the model's now [-] (a vehicle on the move:
@@ -209,7 +208,8 @@ class HeadSupervisor:
         xhat = self._update(y)
         if self.target is None and self.cue is not None:  # look where the node is
             self.mode = "lost"
-            return Decision(xhat, True, True, self._slew(q, qdot), reason="cued")
+            return Decision(xhat, True, True, self._slew(q, qdot), reason="cued",
+                            held=self._carried(q, qdot))
         if self.target is None:  # nothing seen yet: scan around where the head looks
             if not self.spiral.active:
                 self.spiral.start(q)

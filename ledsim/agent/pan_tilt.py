@@ -17,9 +17,14 @@ import math
 
 import numpy as np
 
+from ledsim.agent.node_aim import CUE_GATE
 from ledsim.agent.step import ControlStep, GimbalMotor
 from ledsim.physics.head import MIN_PAN_GAIN, pan_gain, to_encoder, to_head  # noqa: F401
 from observer.supervision.gimbal_load import LoadObserver
+
+#: How long the head holds the LED, and how far over the level it sees the beam at
+#: the data detector reads, before its look tells where the node is [s], [-].
+LOOK_TIME, LOOK_LEVEL = 1.0, 5.0
 
 
 class HeadMotor(GimbalMotor):
@@ -62,7 +67,7 @@ class HeadControlStep(ControlStep):
                  **kwargs):
         super().__init__(*args, **kwargs)
         self.range_gain, self.level_gain = range_gain, level_gain
-        self._anchored = False
+        self._tracked = 0  # successive steps the head has held the LED well
         self.home = None if home is None else np.asarray(home, dtype=float).copy()
         limit = getattr(self.actuator, "u_limit", None)
         self.loads = None if axes is None else [
@@ -80,19 +85,37 @@ class HeadControlStep(ControlStep):
         if self.level_gain is not None and hasattr(self.supervisor, "tell_gain"):
             self.supervisor.tell_gain(self.level_gain.factor(r, theta))
 
+    def anchor(self, r: float, theta: float) -> None:
+        """The head's model's gain is the link's at range ``r`` [m] and emission angle
+        ``theta`` [rad] (the start's, which it was calibrated at): the gains that
+        :meth:`tell_node` tells are relative to it."""
+        for g in (self.range_gain, self.level_gain):
+            if g is not None:
+                g.anchor(r, theta)
+
     def tell_node(self, view) -> None:
         """What the navigation says of the node now (a
         :class:`~ledsim.agent.node_cue.NodeView`): the supervisor's cue, in its inertial
         encoder angles (the start's look plus the LED's turn), and the gains at its
-        range and emission angle (both anchored at the first view's)."""
-        if not self._anchored:
-            for g in (self.range_gain, self.level_gain):
-                if g is not None:
-                    g.anchor(view.range, view.emission_angle)
-            self._anchored = True
+        range and emission angle (relative to :meth:`anchor`'s)."""
         if self.home is not None and hasattr(self.supervisor, "cue"):
             self.supervisor.cue = self.home + np.asarray(view.change, dtype=float)
+            self.supervisor.node.gate = CUE_GATE + view.spread
         self.tell_range(view.range, view.emission_angle)
+
+    def look(self) -> np.ndarray | None:
+        """Where the head holds the LED, turned from its start's look [rad] (bearing,
+        elevation), once its supervisor has tracked it :data:`LOOK_TIME` with the data
+        detector at :data:`LOOK_LEVEL` times the level it sees the beam at (None: not
+        so; a look at a beam's edge is a poor one)."""
+        sup = self.supervisor
+        ref = self.constants.layout.reference
+        steady = getattr(sup, "mode", None) == "tracking" and sup.target is not None \
+            and self.y_gated[ref] >= LOOK_LEVEL * sup.seen
+        self._tracked = self._tracked + 1 if steady else 0
+        if self.home is None or self._tracked * self.constants.Te < LOOK_TIME:
+            return None
+        return sup.target - self.home
 
     def __call__(self, y, t, q=0.0, qdot=0.0, los=None):
         act = self.actuator

@@ -14,10 +14,11 @@ from pathlib import Path
 
 from ledsim.cli.budget_cmd import budget  # noqa: F401 (the budget command)
 from ledsim.cli.checks import _check_vehicle, _say_head, _warn_unserved
+from ledsim.cli.demo_cmd import _demo_video, demo  # noqa: F401 (the demo command)
 from ledsim.cli.export_cmd import export  # noqa: F401 (the export command)
 from ledsim.cli.groups import resolved_distance
 from ledsim.cli.replay_cmd import replay  # noqa: F401 (the replay command)
-from ledsim.cli.spec_flags import VEHICLE, spec_values
+from ledsim.cli.spec_flags import spec_values
 from ledsim.errors import LedsimError
 from ledsim.files.outputs import check_out_dir, check_out_file, output_folder, save_checkpoint
 
@@ -111,74 +112,6 @@ def run(args) -> int:
     print(format_summary(summary))
     log.info(f"wrote {', '.join(str(p) for p in paths)}")
     return 0
-
-
-def demo(args) -> int:
-    """Align the receiver from 0.3 rad off with each estimator; print one table."""
-    from ledsim.files.outputs import atomic_write_text
-    from ledsim.files.results import write_json
-    from ledsim.loop.build.estimation import check_checkpoint
-    from ledsim.loop.registry import COMPARED_ESTIMATORS, TWO_AXIS_ESTIMATORS
-    from ledsim.loop.report import run_many, write_run
-    from ledsim.loop.run_config import RunConfig
-    from ledsim.loop.table import TABLE_HEADER, format_summary
-    from ledsim.loop.video import VideoSpec, check_video
-
-    out = check_out_dir(args.out)
-    t0 = time.perf_counter()
-    rows, summaries = [], []
-    # Every estimator's run and the video are checked before the first one starts.
-    values = spec_values(args)
-    # a pan-tilt head runs the estimators it takes (the KKL, EKF, UKF, PF and oracle)
-    estimators = TWO_AXIS_ESTIMATORS if RunConfig(**values).world.two_axes else \
-        COMPARED_ESTIMATORS
-    cfgs = [RunConfig(scenario="align", estimator=est, **values) for est in estimators]
-    for cfg in cfgs:
-        cfg.validate()
-        check_checkpoint(cfg)
-    _check_vehicle(cfgs[0])
-    if not args.no_video:
-        check_video(_demo_video_config(args.scene, spec_values(args, VEHICLE)), VideoSpec())
-    with output_folder(out) as tmp:
-        for est, cfg in zip(estimators, cfgs, strict=True):
-            summary, trace = run_many(cfg, progress=not args.quiet)
-            write_run(summary, trace, tmp / est)
-            summaries.append(summary)
-            rows.append(format_summary(summary))
-            print(rows[-1] if len(rows) > 1 else f"{TABLE_HEADER}\n{rows[-1]}", flush=True)
-        atomic_write_text(tmp / "table.md", TABLE_HEADER + "\n" + "\n".join(rows) + "\n")
-        write_json(tmp / "results.json", summaries)
-        if not args.no_video:
-            # The video stays on the bench: the scene's cameras frame 8.5 cm, not metres.
-            _demo_video(tmp, args.scene, not args.quiet, spec_values(args, VEHICLE))
-    log.info(f"wrote {out}/table.md, results.json, <estimator>/run.png"
-             f"{'' if args.no_video else ', alignment.mp4, alignment.png'} in "
-          f"{time.perf_counter() - t0:.0f} s")
-    return 0
-
-
-def _demo_video_config(scene: str | None, vehicle: dict, link: dict | None = None,
-                       estimator: str = "kkl"):
-    """The run of the demo's video: 5 s of the ``estimator``-driven alignment with an
-    occlusion (on ``link``: default the paper's bench, whose 8.5 cm the cameras frame)."""
-    from ledsim.loop.run_config import RunConfig
-
-    return RunConfig(scenario="align", estimator=estimator, seconds=5.0, scene=scene,
-                     disturbances=("occlusion:start=3,duration=0.5",), **vehicle,
-                     **(link or {"link": "paper"}))
-
-
-def _demo_video(out: Path, scene: str | None, progress: bool, vehicle: dict,
-                link: dict | None = None, estimator: str = "kkl") -> None:
-    """A short video of the ``estimator``-driven alignment with an occlusion, and a still
-    frame (:func:`_demo_video_config`)."""
-    from ledsim.loop.video import VideoSpec, check_video, render_video
-
-    cfg = _demo_video_config(scene, vehicle, link, estimator)
-    check_video(cfg, VideoSpec())
-    frames = render_video(cfg, 0, out / "alignment.mp4", VideoSpec(),
-                          still=out / "alignment.png", progress=progress)
-    log.info(f"rendered {frames} frames of alignment.mp4")
 
 
 def render(args) -> int:

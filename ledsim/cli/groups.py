@@ -53,7 +53,7 @@ def add_start_arg(p) -> None:
 def add_vehicle_args(p) -> None:
     """The vehicle's flags (run, render, sweep, demo)."""
     add_spec_flags(p, "imu", "station_keeping", "imu_noise", "station_keeping_gains",
-                   "mission")
+                   "mission", "node_error")
 
 
 def add_head_args(p) -> None:

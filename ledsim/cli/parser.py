@@ -255,6 +255,9 @@ def build_parser() -> argparse.ArgumentParser:
     dm.add_argument("--out", default="out/demo", help="output folder")
     add_spec_flags(dm, "scene")
     dm.add_argument("--no-video", action="store_true", help="skip the rendered video")
+    dm.add_argument("--bench-video", action="store_true",
+                    help="render the video on the paper's 8.5 cm bench (side camera) "
+                    "instead of the run's link (overview camera)")
     add_spec_flags(dm, "distance", distance={
         "help": "link distance d [m] (default: the --link preset's)"})
     add_link_args(dm)

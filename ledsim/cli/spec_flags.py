@@ -131,6 +131,10 @@ def flags() -> dict[str, Flag]:
         "mission": Flag("a JSON or TOML file of waypoints (x ahead, y left of the start "
                         "[m], speed [m/s]) the vehicle flies, then holds the last "
                         "(docs/missions.md)", metavar="FILE"),
+        "node_error": Flag("on the move, the error of the node's position as the "
+                           "vehicle believes it [m] (per axis; 0: known); the vehicle "
+                           "learns it from where its head finds the LED",
+                           number(0.0, 100.0, "m"), metavar="M"),
         "integrator": Flag("MuJoCo integrator (docs/physics.md compares them)",
                            choices=INTEGRATORS),
         "torque_limit": Flag("[N m]", TORQUE_LIMIT),

@@ -85,7 +85,9 @@ class LoopRun:
             self.station = np.tile(self.station, (steps, 1))
             if self.axes == 2 and hasattr(self.step, "tell_node"):
                 self.cue = NodeCue(self.world.led_pos, self.world.led_rotation[:, 2],
-                                   self.world.gimbal_in_hull(), v.navigation)
+                                   self.world.gimbal_in_hull(), v.navigation,
+                                   built.node_error, np.random.default_rng([self.seed, 49]))
+                self.step.anchor(*self.cue.reference)
         self.spent = 0.0  # s in the control step
 
     def control(self, k: int, t: float, reading: SensorReading | None = None) -> float:
@@ -118,6 +120,8 @@ class LoopRun:
             elif (nav := self.vehicle.reading) is not None:  # none before it first acts
                 los = nav.gyro
         torque = self.step(r.power, t, q, qdot, los)
+        if self.cue is not None and (look := self.step.look()) is not None:
+            self.cue.learn(self.vehicle.navigation, look)  # where the head finds the LED
         self.spent += time.perf_counter() - t0
         d = self.step.decision
         self.xhat[k] = d.reported

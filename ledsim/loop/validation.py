@@ -142,6 +142,8 @@ def validate_run(cfg) -> None:
         checks.append(("--bit-rate", cfg.bit_rate, MIN_BIT_RATE <= cfg.bit_rate <= 1e10,
                        f"in [{MIN_BIT_RATE:g}, 1e10] bit/s"))
     checks.append(("--depth", cfg.depth, 1.0 <= cfg.depth <= 500.0, "in [1, 500] m"))
+    checks.append(("--node-error", cfg.node_error, 0.0 <= cfg.node_error <= 100.0,
+                   "in [0, 100] m"))
     if cfg.transmitter_depth is not None:
         checks.append(("--transmitter-depth", cfg.transmitter_depth,
                        0.2 <= cfg.transmitter_depth <= 500.0, "in [0.2, 500] m"))
@@ -164,6 +166,9 @@ def validate_run(cfg) -> None:
         raise LedsimError(f"--window {cfg.window:g} is not allowed: it is longer than the "
                           f"{cfg.run_seconds:g} s run ({length}): must be in (0, "
                           f"{cfg.run_seconds:g}] s")
+    if cfg.node_error and cfg.mission_plan is None:
+        raise LedsimError(f"--node-error {cfg.node_error:g} is what a vehicle on the move "
+                          "believes of the node: it needs a --mission or a mission scenario")
     navigation_noise(cfg.imu_noise)
     keeping_gains(cfg.station_keeping_gains)
     if cfg.mission is not None or cfg.scenario in MISSION_SCENARIOS:

@@ -60,6 +60,10 @@ class WorldPart:
         mission: a JSON or TOML file of waypoints the receiver's vehicle flies, then
             keeps station at the last (:mod:`ledsim.agent.guidance`; None: it keeps
             station where it starts).
+        node_error: on the move, how far off the vehicle's navigation believes the node
+            is [m] (a standard deviation per axis, drawn from the run's seed; 0: its
+            position is known). The vehicle then learns it from where its head finds the
+            LED (:class:`~ledsim.agent.node_cue.NodeCue`).
         lens_field_deg: a lens in front of the physical receiver's detector, narrowing
             its half-power field to this many degrees and gathering a larger aperture's
             light (the detector's étendue kept: about 8x for 30 to 10 deg) (None: the
@@ -88,6 +92,7 @@ class WorldPart:
     transmitter_aimed: bool = False
     lens_field_deg: float | None = None
     mission: str | None = None
+    node_error: float = 0.0
 
     def __post_init__(self) -> None:
         if self.distance is None:  # the link preset's (0.085 m on the paper's bench)

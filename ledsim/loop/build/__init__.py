@@ -46,8 +46,9 @@ class Latest:
 @dataclass
 class SeedRun:
     """One seed's built run: its world, its measurement noise, its sensor, disturbances
-    and vehicle (None: run without the vehicle's sensors), its control step, and the
-    last reading its oracle would read."""
+    and vehicle (None: run without the vehicle's sensors), its control step, the last
+    reading its oracle would read, and how far off its vehicle believes the node is
+    [m] (``node_error``)."""
 
     seed: int
     world: LinkWorld
@@ -57,6 +58,7 @@ class SeedRun:
     vehicle: Vehicle | None
     step: ControlStep
     latest: Latest
+    node_error: float = 0.0
 
 
 @dataclass
@@ -105,4 +107,5 @@ def build_seed(cfg: RunConfig, system: GimbalSystem, model, seed: int, world: Li
     else:
         step = control_step(cfg, system, model, seed, world.gimbal_angle,
                             lambda: latest.reading.x, record, noise)
-    return SeedRun(seed, world, noise, sensor, disturbances, vehicle, step, latest)
+    return SeedRun(seed, world, noise, sensor, disturbances, vehicle, step, latest,
+                   cfg.node_error)
