@@ -49,17 +49,17 @@ METRIC_COLUMNS = ("rmse_x1", "rmse_x2", "rmse_steady_x1", "rmse_steady_x2",
                   "throughput_bps", "fec_share", "geometry_share", "hull_error_rms",
                   "navigation_error_rms", "received_power_w", "loss_events",
                   "false_loss_events", "reseeds", "silent_error_share")
-#: Columns that depend on the machine and its load: the only ones that may differ
-#: between backends or reruns.
+#: Columns that depend on the machine and its load (the only ones reruns may change).
 TIMING_COLUMNS = ("us_per_step", "realtime_factor")
 #: The rest of the run's spec, by its names (:data:`~ledsim.loop.run_config.FLAT`): every
 #: setting a cell ran with that the columns above do not give (a repeatable one's items
-#: joined by ``;``). Last, so that the columns before keep their places.
-SPEC_COLUMNS = tuple(n for n in FLAT if n not in CELL_COLUMNS and n not in (
+#: joined by ``;``); then what the run delivered (``range_m``: nearest;farthest); then
+#: the spec's names added since (LATER_SPEC). New columns go last: none moves.
+LATER_SPEC = ("node_error",)
+SPEC_COLUMNS = tuple(n for n in FLAT if n not in CELL_COLUMNS + LATER_SPEC and n not in (
     "estimator", "disturbances", "distance", "noise_scale", "seeds", "workers"))
-#: What the run delivered (``range_m``: nearest;farthest), last: no column moves.
 DATA_COLUMNS = ("goodput_bits", "ideal_bits", "outages", "outage_s", "range_m", "edge_goodput_bits", "edge_ideal_bits")  # noqa: E501
-COLUMNS = CELL_COLUMNS + METRIC_COLUMNS + TIMING_COLUMNS + SPEC_COLUMNS + DATA_COLUMNS
+COLUMNS = CELL_COLUMNS + METRIC_COLUMNS + TIMING_COLUMNS + SPEC_COLUMNS + DATA_COLUMNS + LATER_SPEC
 
 
 def split_disturbance(cell: str) -> tuple[str, ...]:
@@ -178,7 +178,7 @@ def run_cell(job: tuple[RunConfig, Cell]) -> dict:
            DATA_COLUMNS}, "range_m": ";".join(f"{v:g}" for v in m.range_m or ())}
     flat = cfg.flat()
     row.update({n: ";".join(flat[n]) if isinstance(flat[n], tuple) else flat[n]
-                for n in SPEC_COLUMNS})
+                for n in SPEC_COLUMNS + LATER_SPEC})
     return {"version": __version__, "row": to_jsonable(row)}
 
 
