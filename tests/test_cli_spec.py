@@ -41,18 +41,22 @@ def test_a_spec_goes_to_a_command_line_and_back(spec):
 
 
 def test_a_sweeps_rows_give_every_spec_name():
-    from ledsim.loop.sweep import COLUMNS, DATA_COLUMNS, SPEC_COLUMNS
+    from ledsim.loop.sweep import COLUMNS, DATA_COLUMNS, LATER_SPEC, SPEC_COLUMNS
 
     grid = {"disturbances": "disturbance", "seeds": "seed", "workers": None}
     assert {grid.get(n, n) for n in FLAT} - {None} <= set(COLUMNS)
-    # appended: old columns keep places (the data delivered after the spec)
-    assert COLUMNS[-len(DATA_COLUMNS):] == DATA_COLUMNS
-    assert COLUMNS[-len(SPEC_COLUMNS) - len(DATA_COLUMNS):-len(DATA_COLUMNS)] == SPEC_COLUMNS
+    # appended: old columns keep places (the data delivered after the spec, then the
+    # spec's names added since)
+    tail = SPEC_COLUMNS + DATA_COLUMNS + LATER_SPEC
+    assert COLUMNS[-len(tail):] == tail
+    assert DATA_COLUMNS[:5] == ("goodput_bits", "ideal_bits", "outages", "outage_s",
+                                "range_m")
 
 
 def test_a_cell_of_an_older_sweep_leaves_the_new_columns_blank():
-    from ledsim.loop.sweep import COLUMNS, DATA_COLUMNS, SPEC_COLUMNS, _csv
+    from ledsim.loop.sweep import COLUMNS, DATA_COLUMNS, LATER_SPEC, SPEC_COLUMNS, _csv
 
-    row = {k: 1.0 for k in COLUMNS if k not in SPEC_COLUMNS + DATA_COLUMNS}
+    new = SPEC_COLUMNS + DATA_COLUMNS + LATER_SPEC
+    row = {k: 1.0 for k in COLUMNS if k not in new}
     text = _csv([row], COLUMNS)
-    assert text.splitlines()[1].endswith("," * (len(SPEC_COLUMNS) + len(DATA_COLUMNS)))
+    assert text.splitlines()[1].endswith("," * len(new))
