@@ -36,7 +36,12 @@ class NodeAim:
         self._last: np.ndarray | None = None  # the last step's cue
         self.rate: np.ndarray | None = None  # its turn [rad/s] (None: no cue)
         self._seen: np.ndarray | None = None  # the cue when the target was set
-        self.gate = CUE_GATE  # widened by the node's uncertainty (NodeView.spread)
+        self.spread = 0.0  # the node's uncertainty [rad] (NodeView.spread)
+
+    def tell(self, cue: np.ndarray, spread: float = 0.0) -> None:
+        """Where the navigation puts the node this step [rad], and how unsure it is of
+        it [rad] (it widens the gate)."""
+        self.cue, self.spread = cue, spread
 
     def observe(self) -> None:
         """At the start of a step: the cue's turn, low-passed, when it was told anew."""
@@ -63,9 +68,9 @@ class NodeAim:
         return self.cue if self.off(aim) else aim
 
     def off(self, where: np.ndarray) -> bool:
-        """Whether encoder angles ``where`` [rad] are farther than :attr:`gate` (at
-        least :data:`CUE_GATE`) from the cue (False without one)."""
-        return self.cue is not None and magnitude(where - self.cue) > self.gate
+        """Whether encoder angles ``where`` [rad] are farther than :data:`CUE_GATE`
+        and the node's :attr:`spread` from the cue (False without one)."""
+        return self.cue is not None and magnitude(where - self.cue) > CUE_GATE + self.spread
 
     def settled(self, qdot: np.ndarray, arrive_rate: float) -> bool:
         """The head turns no faster than ``arrive_rate`` [rad/s] against the cue's turn

@@ -73,9 +73,7 @@ class NodeCue:
         self.start = self._direction(d)
         #: the true range [m] and emission angle [rad] at the start, which the head's
         #: model was calibrated at (as the start's look is the encoders' home)
-        self.reference = (float(np.linalg.norm(d)),
-                          math.acos(min(1.0, max(-1.0, float(-(d @ self.axis))
-                                                 / float(np.linalg.norm(d))))))
+        self.reference = self._range_angle(d)
         self._last = 0.0  # the bearing's last turn: the turn is continuous
         self.error = float(error)
         self.led = led.copy()  # the belief
@@ -88,6 +86,13 @@ class NodeCue:
     def _hinge(self, nav) -> np.ndarray:
         return np.asarray(nav.position) + np.asarray(nav.attitude) @ self.l_gimbal
 
+    def _range_angle(self, d: np.ndarray) -> tuple[float, float]:
+        """The range [m] of the LED offset ``d`` (from the hinge) and the angle off the
+        LED's axis at which it sees the hinge [rad]."""
+        r = float(np.linalg.norm(d))
+        cos_t = float(-(d @ self.axis)) / max(r, 1e-9)
+        return r, math.acos(min(1.0, max(-1.0, cos_t)))
+
     @staticmethod
     def _direction(d: np.ndarray) -> np.ndarray:
         return np.array([math.atan2(d[1], d[0]), math.atan2(d[2], math.hypot(d[0], d[1]))])
@@ -99,13 +104,12 @@ class NodeCue:
         turn = self._direction(d) - self.start
         turn[0] = self._last + math.remainder(turn[0] - self._last, 2.0 * math.pi)
         self._last = float(turn[0])
-        r = float(np.linalg.norm(d))
-        cos_t = float(-(d @ self.axis)) / max(r, 1e-9)
+        r, emission = self._range_angle(d)
         spread = 0.0
         if self.error > 0:  # the belief's largest standard deviation, seen from here
             sigma = math.sqrt(float(np.linalg.eigvalsh(np.linalg.inv(self._info))[-1]))
             spread = min(3.0 * sigma / max(r, 1.0), math.pi)
-        return NodeView(turn, r, math.acos(min(1.0, max(-1.0, cos_t))), spread)
+        return NodeView(turn, r, emission, spread)
 
     def learn(self, nav, change) -> None:
         """The head holds the LED looking ``change`` [rad] (bearing, elevation) turned

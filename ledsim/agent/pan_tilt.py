@@ -17,7 +17,6 @@ import math
 
 import numpy as np
 
-from ledsim.agent.node_aim import CUE_GATE
 from ledsim.agent.step import ControlStep, GimbalMotor
 from ledsim.physics.head import MIN_PAN_GAIN, pan_gain, to_encoder, to_head  # noqa: F401
 from observer.supervision.gimbal_load import LoadObserver
@@ -60,7 +59,7 @@ class HeadControlStep(ControlStep):
     - on a moving vehicle (``range_gain``: :class:`~ledsim.agent.range_gain.RangeGain`)
       the filters' model is told the gain at the range the navigation knows
       (:meth:`tell_range`), and the supervisor where the navigation puts the node
-      (:meth:`tell_cue`; ``home``: the encoder angles that looked at it at the start).
+      (:meth:`tell_node`; ``home``: the encoder angles that looked at it at the start).
     """
 
     def __init__(self, *args, axes=None, range_gain=None, level_gain=None, home=None,
@@ -98,9 +97,9 @@ class HeadControlStep(ControlStep):
         :class:`~ledsim.agent.node_cue.NodeView`): the supervisor's cue, in its inertial
         encoder angles (the start's look plus the LED's turn), and the gains at its
         range and emission angle (relative to :meth:`anchor`'s)."""
-        if self.home is not None and hasattr(self.supervisor, "cue"):
-            self.supervisor.cue = self.home + np.asarray(view.change, dtype=float)
-            self.supervisor.node.gate = CUE_GATE + view.spread
+        if self.home is not None and hasattr(self.supervisor, "node"):
+            self.supervisor.node.tell(self.home + np.asarray(view.change, dtype=float),
+                                      view.spread)
         self.tell_range(view.range, view.emission_angle)
 
     def look(self) -> np.ndarray | None:

@@ -111,7 +111,8 @@ class LoopRun:
             if self.moving:
                 self.station[k] = self.vehicle.target
                 if self.cue is not None:  # the pan-tilt's cue, filters' gain and levels
-                    self.step.tell_node(self.cue.at(self.vehicle.navigation))
+                    navigated = self.vehicle.navigation
+                    self.step.tell_node(self.cue.at(navigated))
         t0 = time.perf_counter()
         los = None
         if self.aided:  # a pan-tilt head takes the gyro's three rates (agent/pan_tilt.py)
@@ -121,7 +122,7 @@ class LoopRun:
                 los = nav.gyro
         torque = self.step(r.power, t, q, qdot, los)
         if self.cue is not None and (look := self.step.look()) is not None:
-            self.cue.learn(self.vehicle.navigation, look)  # where the head finds the LED
+            self.cue.learn(navigated, look)  # where the head finds the LED
         self.spent += time.perf_counter() - t0
         d = self.step.decision
         self.xhat[k] = d.reported
