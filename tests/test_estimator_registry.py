@@ -24,7 +24,7 @@ def test_the_lists_are_the_registrys_and_keep_their_old_names_and_order():
     assert CLOSED_FORM_ESTIMATORS == ("kkl", "kkl-paper", "kkl-handover", "kkl-scheduled",
                                       "ekf", "ukf", "pf")
     assert LOOP_ESTIMATORS == ("kkl", "kkl-scheduled", "kkl-bank", "ekf", "ukf", "pf",
-                               "oracle")
+                               "oracle", "es", "scan-ekf")
     assert COMPARED_ESTIMATORS == ("kkl", "kkl-bank", "ekf", "ukf", "pf", "oracle")
     assert LOOP_KKL_ESTIMATORS == ("kkl", "kkl-scheduled", "kkl-bank")
     # The names where they were first defined still work (aliases).
@@ -37,7 +37,7 @@ def test_the_lists_are_the_registrys_and_keep_their_old_names_and_order():
 
 def test_every_entry_names_a_family_and_a_world():
     for e in REGISTRY:
-        assert e.family in ("kkl", "bayes", "oracle"), e
+        assert e.family in ("kkl", "bayes", "oracle", "scanning"), e
         assert e.closed_form or e.loop, e
         assert e.loop or not e.compared, e
 
@@ -77,3 +77,5 @@ def test_each_entry_builds_its_estimator():
     assert build_estimator("kkl", model, checkpoint=shipped_checkpoint(0.085)) is not None
     with pytest.raises(LedsimError, match="needs a checkpoint"):
         build_estimator("kkl-paper", model)
+    with pytest.raises(LedsimError, match="'es' runs on the pan-tilt head only"):
+        build_estimator("es", model)  # the paper's one axis has no data detector

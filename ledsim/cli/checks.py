@@ -93,7 +93,7 @@ def _say_head(cfg, args) -> None:
     gimbal, the pan-tilt default's exception (:func:`~ledsim.loop.registry.yaw_only`);
     a checkpoint's own error comes first."""
     from ledsim.loop.build.estimation import check_checkpoint
-    from ledsim.loop.registry import TWO_AXIS_ESTIMATORS, yaw_only
+    from ledsim.loop.registry import PAN_TILT_ESTIMATORS, yaw_only
 
     if getattr(args, "gimbal", None) is not None or getattr(args, "receiver", None) \
             is not None or cfg.link == "paper" or cfg.world.head[0] != "yaw":
@@ -103,7 +103,7 @@ def _say_head(cfg, args) -> None:
     why = yaw_only(e.estimator, e.checkpoint)
     log.info(f"runs the yaw gimbal with its pair, not a physical link's pan-tilt default: "
              f"{why} (--gimbal yaw says so; --gimbal pan-tilt takes "
-             f"{', '.join(TWO_AXIS_ESTIMATORS)})")
+             f"{', '.join(PAN_TILT_ESTIMATORS)})")
 
 
 def _warn_mixed_heads(grid) -> None:

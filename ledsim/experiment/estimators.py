@@ -15,6 +15,9 @@ ekf         extended Kalman filter
 ukf         unscented Kalman filter
 pf          bootstrap particle filter
 oracle      handed the true state (MuJoCo loop only): the best any estimator can do
+es          extremum seeking: a model-free hill climb on the data detector's power, which
+            scans a circle (pan-tilt head only; :mod:`observer.baselines.scanning`)
+scan-ekf    Solanki et al.'s scanning EKF on the data detector alone (pan-tilt head only)
 ==========  ====================================================================
 """
 
@@ -42,7 +45,9 @@ class EstimatorEntry:
         name: the ``--estimator`` value.
         description: one line for ``--help``.
         family: ``kkl`` (a learned KKL observer from a checkpoint), ``bayes`` (a filter
-            on the model: EKF, UKF, particle filter) or ``oracle`` (handed the truth).
+            on the model: EKF, UKF, particle filter), ``oracle`` (handed the truth) or
+            ``scanning`` (the field's one-photodiode baselines, which scan to see a
+            direction: on a head with a data detector).
         build: ``build(name, system, model, settings)`` gives the estimator (None: the
             oracle, which the loop hands the truth); ``settings`` are
             :func:`build_estimator`'s keyword arguments.
@@ -81,6 +86,17 @@ def _handover(name, system, model, s) -> Estimator:
     return HandoverKKL(fast, slow, handover_steps=int(round(HANDOVER_S / system.Te)))
 
 
+def _scanning(name, system, model, s) -> Estimator:
+    from observer.baselines.scanning import ExtremumSeeking, ScanningEKF
+
+    layout = getattr(getattr(model, "constants", None), "layout", None)
+    if layout is None or model.n_state != 4:
+        raise LedsimError(f"estimator {name!r} runs on the pan-tilt head only (it scans "
+                          "its data detector on both axes): use --gimbal pan-tilt")
+    cls = ExtremumSeeking if name == "es" else ScanningEKF
+    return cls(model, layout.reference)
+
+
 def _pf(name, system, model, s) -> Estimator:
     return ParticleFilter(model, s["particles"],
                           **({} if s["redraw"] else {"lost_chi2": math.inf}))
@@ -105,6 +121,10 @@ REGISTRY = (
     EstimatorEntry("pf", "bootstrap particle filter", "bayes", _pf),
     EstimatorEntry("oracle", "handed the true state (MuJoCo loop only)", "oracle",
                    lambda name, system, model, s: None, closed_form=False),
+    EstimatorEntry("es", "extremum seeking on the data detector (pan-tilt head)",
+                   "scanning", _scanning, closed_form=False, compared=False),
+    EstimatorEntry("scan-ekf", "Solanki et al.'s scanning one-photodiode EKF (pan-tilt "
+                   "head)", "scanning", _scanning, closed_form=False, compared=False),
 )
 #: name -> description, every estimator (the registry's names; kept for ``--help``).
 ESTIMATORS = {e.name: e.description for e in REGISTRY}

@@ -5,7 +5,7 @@ from __future__ import annotations
 
 from ledsim.errors import LedsimError, check_ranges
 from ledsim.experiment.estimators import LOOP_KKL_ESTIMATORS as KKL_ON_BENCH
-from ledsim.loop.registry import TWO_AXIS_ESTIMATORS
+from ledsim.loop.registry import PAN_TILT_ESTIMATORS
 
 
 def _check_lens(cfg) -> None:
@@ -29,9 +29,9 @@ def _check_two_axes(cfg) -> None:
         raise LedsimError("--gimbal pan-tilt is not allowed with --link paper: the paper's "
                           "bench measures its photodiodes' response about the hinge alone, "
                           "so no photodiode sees the tilt (choose a physical --link)")
-    if cfg.estimator not in TWO_AXIS_ESTIMATORS:
+    if cfg.estimator not in PAN_TILT_ESTIMATORS:
         raise LedsimError(f"estimator {cfg.estimator!r} is not allowed with --gimbal "
-                          f"pan-tilt: choose one of {', '.join(TWO_AXIS_ESTIMATORS)}")
+                          f"pan-tilt: choose one of {', '.join(PAN_TILT_ESTIMATORS)}")
     if cfg.filter_distance != "configured":
         raise LedsimError(f"--filter-distance {cfg.filter_distance} is not allowed with "
                           "--gimbal pan-tilt: its filters know the configured distance")

@@ -93,7 +93,7 @@ def yaw_only(estimator: str, checkpoint: str | None) -> str | None:
     KKL). A physical-link run that names no head and asks for one of them runs the yaw
     gimbal (so every command of ledsim before the pan-tilt default still runs as it
     did)."""
-    if estimator in LOOP_ESTIMATORS and estimator not in TWO_AXIS_ESTIMATORS:
+    if estimator in LOOP_ESTIMATORS and estimator not in PAN_TILT_ESTIMATORS:
         return f"estimator {estimator} is one-axis"
     if checkpoint:
         from ledsim.files.resources import pair_paths
@@ -106,6 +106,11 @@ def yaw_only(estimator: str, checkpoint: str | None) -> str | None:
 #: The estimators a pan-tilt run takes: the shipped KKL (one per axis, on its pair's
 #: ratios), the four-state filters on the head's model and the oracle.
 TWO_AXIS_ESTIMATORS = ("kkl", "ekf", "ukf", "pf", "oracle")
+#: The field's one-photodiode baselines, which scan the head (pan-tilt runs only; not
+#: among the estimators ``ledsim demo`` compares).
+SCANNING_ESTIMATORS = ("es", "scan-ekf")
+#: Every estimator a pan-tilt run takes.
+PAN_TILT_ESTIMATORS = TWO_AXIS_ESTIMATORS + SCANNING_ESTIMATORS
 #: Largest |initial angle| [rad] a run may start at: the LED must stay in front of the
 #: photodiodes (|phi| < pi/2 with the photodiodes' offset to spare).
 MAX_INITIAL_ANGLE = 1.4

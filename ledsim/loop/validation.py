@@ -32,6 +32,7 @@ from ledsim.loop.registry import (
     OMEGA_MODELS,
     PHYSICS_SCENARIOS,
     RECEIVERS,
+    SCANNING_ESTIMATORS,
     peak_snr,
 )
 from ledsim.physics.disturbances import check_sea, check_timing, parse_disturbance
@@ -80,6 +81,10 @@ def validate_run(cfg) -> None:
                           f"{receiver} needs --gimbal {RECEIVERS[receiver]})")
     if cfg.world.two_axes:
         _check_two_axes(cfg)
+    elif cfg.estimator in SCANNING_ESTIMATORS:
+        raise LedsimError(f"estimator {cfg.estimator!r} runs on the pan-tilt head only "
+                          "(it scans its data detector): use --gimbal pan-tilt on a "
+                          "physical --link")
     elif cfg.channel_mismatch:
         raise LedsimError(f"--channel-mismatch {cfg.channel_mismatch:g} is not allowed "
                           "with --receiver pair: it mismatches the quad's pointing pairs")

@@ -55,6 +55,8 @@ class AxisRatioModel(DiscreteSystem):
                        MeasurementNoise(std, 2))
         self._coef = (head.coef_angle[axis], head.coef_rate[axis])
         self._coefs = tuple(c.tolist() for c in self._coef)  # f's plain-float path
+        #: (b1, b2, b3) of the rate's step, rate' = b1 rate + b2 u + b3 |rate| rate.
+        self.rate_coefficients = tuple(self._coefs[1])
         self._gains = head.channel_gains.tolist()
         self._fix_grid = None  # (log ratio difference, angle) for fix(), built once
 

@@ -21,6 +21,7 @@ from ledsim.agent.supervisor import LinkSupervisor
 from ledsim.experiment.estimators import build_estimator
 from ledsim.loop.build.estimation import loop_estimator, run_noise
 from ledsim.loop.build.head_kkl import head_kkl
+from ledsim.loop.registry import SCANNING_ESTIMATORS
 from ledsim.loop.run_config import RunConfig
 from ledsim.physics.axis_model import AxisRatioModel
 from ledsim.physics.gimbal_system import GimbalSystem
@@ -124,7 +125,7 @@ def head_control_step(cfg: RunConfig, system: HeadSystem, model: HeadModel, seed
     if cfg.mission_plan is not None:  # on the move: gains at the navigation's range
         c = system.constants
         level_gain = RangeGain(None, cfg.distance, c.attenuation, order=c.lambertian_order)
-        if cfg.estimator in ("ekf", "ukf", "pf"):
+        if cfg.estimator in ("ekf", "ukf", "pf", "scan-ekf"):
             model = model.calibrated(model.channel_gains)  # its own: its gain moves
             range_gain = RangeGain(model, cfg.distance, c.attenuation,
                                    order=c.lambertian_order)
@@ -140,9 +141,12 @@ def head_control_step(cfg: RunConfig, system: HeadSystem, model: HeadModel, seed
     if cfg.supervision and spec.law.tracks_beam:
         ref = system.constants.layout.reference
         floor = (run_noise(cfg, system) if noise is None else noise).std
+        # the scanning baselines track on the data detector alone: the quad's fix
+        # acquires for them, but never corrects what they track
+        alone = {"reslew": math.inf} if cfg.estimator in SCANNING_ESTIMATORS else {}
         supervisor = HeadSupervisor(est, [AxisRatioModel(model, a) for a in range(2)], slew,
                                     float(model.h(np.zeros(4))[ref]), ref, system.Te,
-                                    floor=floor)
+                                    floor=floor, **alone)
     elif cfg.fast_acquisition:  # the oracle's slew: its estimate is the truth
         supervisor = Unsupervised(est, slew, 0.0)
     else:
