@@ -24,7 +24,7 @@ import numpy as np
 
 from ledsim.files.results import to_jsonable
 from ledsim.loop.closed_loop import run_once
-from ledsim.loop.registry import LOOP_ESTIMATORS
+from ledsim.loop.registry import LOOP_ESTIMATORS, SCANNING_ESTIMATORS
 from ledsim.loop.run_config import RunConfig
 
 KINDS = ("vibration:frequency=3,torque=0.5,force=2", "current:speed=0.3,gust=0.05",
@@ -34,7 +34,8 @@ KINDS = ("vibration:frequency=3,torque=0.5,force=2", "current:speed=0.3,gust=0.0
 #: The series hashed: the run's own (what the estimator was given is hashed with the
 #: estimates it gives back, so a new kept series does not move a fingerprint).
 CORE = ("t", "phi", "phidot", "phi_hat", "phidot_hat", "p1", "p2", "torque", "lost")
-CASES = ([(f"{e}", dict(estimator=e)) for e in LOOP_ESTIMATORS]
+CASES = ([(f"{e}", dict(estimator=e)) for e in LOOP_ESTIMATORS
+          if e not in SCANNING_ESTIMATORS]  # those scan a pan-tilt head: not the bench's
          + [(f"kkl {k}", dict(disturbances=(k,))) for k in KINDS]
          + [(f"ekf {k}", dict(estimator="ekf", disturbances=(k,))) for k in KINDS[:5]]
          + [("kkl no imu", dict(imu=False)), ("kkl still hull", dict(station_keeping=False)),

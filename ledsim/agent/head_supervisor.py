@@ -23,13 +23,11 @@ mode            what the head does
                 the beam seen again is a fix and an acquisition
 ==============  =============================================================
 
-On a vehicle that moves, its navigation tells the supervisor where the node is each
-step (:attr:`HeadSupervisor.cue`, in the same encoder angles; None: a station, as
-above; :mod:`ledsim.agent.node_aim`). While acquiring, the fixes' target moves as the
-cue has moved since; otherwise the head looks at the cue, and while it cannot see the
-LED it stares there rather than spiralling: a node whose position is known and whose
-LED is out of its beam (a fly-by before the beam, a survey's far lanes) is where the
-light will come from. A fix or an estimate far from the cue is not the LED.
+On the move the navigation tells where the node is each step (:attr:`HeadSupervisor.cue`,
+in the same encoder angles; None: a station; :mod:`ledsim.agent.node_aim`). While
+acquiring, the fixes' target moves as the cue has; otherwise the head looks at the cue,
+and stares there while the LED is out of sight (the light will come from there). A fix
+or an estimate far from the cue is not the LED.
 """
 
 from __future__ import annotations
@@ -77,13 +75,16 @@ class HeadSupervisor:
             the FEC range: 0.03 rad rms, 0.1 at worst; a kick's is more at once).
         fit_fixes: how many of the last fixes the LED's direction and turn are fitted to
             while acquiring (a least-squares line in time).
+        corrects: the quad's fix corrects a tracked estimate (False: the scanning
+            baselines track on the data detector alone).
     """
 
     def __init__(self, estimator, axes, slew, peak: float, reference: int, Te: float,
                  seen_level: float = 0.05, dark_level: float = 0.02,
                  loss_time: float = 0.05, patience: float = 0.5,
                  arrive_tol: float = 0.005, arrive_rate: float = 0.3, reslew: float = 0.1,
-                 reslew_time: float = 0.05, fit_fixes: int = 8, floor: float = 0.0):
+                 reslew_time: float = 0.05, fit_fixes: int = 8, floor: float = 0.0,
+                 corrects: bool = True):
         self.estimator, self.axes, self.slew = estimator, list(axes), slew
         self.peak, self.reference, self.Te = float(peak), int(reference), Te
         self._levels = (seen_level * self.peak, dark_level * self.peak)
@@ -92,10 +93,9 @@ class HeadSupervisor:
         self.loss_steps = max(1, int(round(loss_time / Te)))
         self.patience_steps = int(round(patience / Te))
         self.arrive_tol, self.arrive_rate, self.reslew = arrive_tol, arrive_rate, reslew
+        self.corrects, self.spiral, self.mode = corrects, SpiralScan(Te), "acquiring"
         self.reslew_steps = max(1, int(round(reslew_time / Te)))
         self._off_steps = 0.0  # successive tracked steps off, each in reslew's
-        self.spiral = SpiralScan(Te)
-        self.mode = "acquiring"
         self.target: np.ndarray | None = None  # encoder angles where the LED was seen
         self._dark_steps = 0
         self._blind_steps = 0  # successive acquiring steps without a fix
@@ -108,7 +108,6 @@ class HeadSupervisor:
         self._turn: np.ndarray | None = None  # d(target)/dt from the fixes [rad/s]
 
     gain_ratio = 1.0  # the powers reach the estimator as they are (ratios need no gain)
-
     def tell_gain(self, gain: float) -> None:
         """The link's gain is ``gain`` times the model's now [-] (a vehicle on the move:
         ``agent/range_gain.py``): the levels at which the beam is seen and gone follow,
@@ -255,7 +254,8 @@ class HeadSupervisor:
             # estimate left behind): the fix takes over, and the slew.
             # Each step off adds how far off it is, in reslew's: five steps just off
             # (a noisy fix) or one far off (a kick: 0.5 rad within 30 ms) trip it.
-            off = 0.0 if fix is None else max(magnitude(angles), magnitude(fix - angles))
+            off = 0.0 if fix is None or not self.corrects else \
+                max(magnitude(angles), magnitude(fix - angles))
             self._off_steps = self._off_steps + off / self.reslew if off > self.reslew \
                 else 0.0
             if self._off_steps >= self.reslew_steps:

@@ -30,8 +30,9 @@ from observer.system import DiscreteSystem
 
 #: The power the scan gives up at its radius, over the peak [-] (a 0.09 dB loss).
 DIP = 0.02
-#: The scan's frequency [Hz]: inside the alignment loop's 3 rad/s outer bandwidth's
-#: reach, so the head follows the circle.
+#: The scan's frequency [Hz] (3.1 rad/s, at the alignment loop's 3 rad/s outer
+#: bandwidth: the head follows the circle, smaller and later, which both baselines see
+#: through the input they are told).
 FREQUENCY = 0.5
 
 
@@ -140,14 +141,16 @@ class _Window:
 class ExtremumSeeking(Estimator):
     """Model-free extremum seeking on ``detector``'s power, with a circular dither.
 
-    Each step the head's offset from the scan's centre (its estimate, carried by the
-    model's f under the input it is told: the head's own motion) multiplies the
-    power's ripple; their mean over one period, over the mean power and the offset's
-    variance, is the slope of the log power, -m / w^2 at a misalignment m for a beam
-    of width w (the beam whose power dips by ``dip`` at ``radius``: the gain a
-    designer tunes). The slope steers a second-order loop of natural time
-    ``time_constant`` [s]: the angle and the LED's turn rate (so a steady turn is
-    followed without lag).
+    Each step the log of the power and the head's angle (its estimate, carried by the
+    model's f under the input it is told: the head's own motion, as an encoder would
+    tell it) pass a high-pass of one scan period, which turns a drift (the range on a
+    fly-by, the hull's heave) into a constant. Over one period, the least-squares slope
+    of the log power's ripple on the head's offset (both axes at once: the tilt and
+    the pan follow the circle with different lags, an ellipse) is the gradient of the
+    log power, -m / w^2 at a misalignment m for a beam of width w (the beam whose power
+    dips by ``dip`` at ``radius``: the gain a designer tunes). The misalignment steers a
+    second-order loop of natural time ``time_constant`` [s]: the angle and the LED's
+    turn rate (so a steady turn is followed without lag).
     """
 
     name = "es"
@@ -161,6 +164,7 @@ class ExtremumSeeking(Estimator):
         self.scan = CircularScan(self.n, radius, frequency, system.Te)
         self.width2 = radius * radius / (2.0 * dip)  # w^2 [rad^2]
         self.period = max(2, int(round(1.0 / (frequency * system.Te))))
+        self.high_pass = system.Te * frequency  # the high-pass's step over its time
         self.tau = float(time_constant)
         self.reset()
 
@@ -168,8 +172,9 @@ class ExtremumSeeking(Estimator):
         self.x = self.initial_guess(x0)  # the head's motion (f), the LED held still
         self.shift = np.zeros(self.n)  # the climb's correction to the angle [rad]
         self.turn = np.zeros(self.n)  # the LED's turn rate it has learnt [rad/s]
-        self.power, self.centre = _Window(self.period), _Window(self.period)
-        self.slope, self.spread = _Window(self.period), _Window(self.period)
+        self._slow = None  # the high-passes' low parts: (log power, angle)
+        self.ripple, self.offset, self.centre = (_Window(self.period) for _ in range(3))
+        self.cross, self.spread = _Window(self.period), _Window(self.period)
         self.report = self.belief
 
     @property
@@ -179,19 +184,30 @@ class ExtremumSeeking(Estimator):
 
     def update(self, y) -> np.ndarray:
         J = float(np.asarray(y, dtype=float)[self.detector])
-        if math.isfinite(J):
-            angle = self.x[:self.n] + self.shift
-            mean_j = self.power.add(J)
+        if math.isfinite(J) and J > 0:
+            lj, angle = math.log(J), self.x[:self.n] + self.shift
+            if self._slow is None:
+                self._slow = (lj, angle.copy())
+            a = self.high_pass
+            slow_j, slow_a = self._slow
+            slow_j, slow_a = slow_j + a * (lj - slow_j), slow_a + a * (angle - slow_a)
+            self._slow = (slow_j, slow_a)
+            r, o = lj - slow_j, angle - slow_a
+            mean_r, mean_o = self.ripple.add(r), self.offset.add(o)
             centre = self.centre.add(angle)
-            o = angle - centre  # the head's offset from its mean
-            g = self.slope.add((J - mean_j) * o)
-            var = self.spread.add(o * o)
-            if self.slope.full and mean_j > 0:
-                # the mean misalignment, less the part the estimate already holds
-                e = -self.width2 * g / (mean_j * np.maximum(var, 1e-12)) - centre
-                Te, tau = self.system.Te, self.tau
-                self.turn = self.turn + e * Te / (tau * tau)
-                self.shift = self.shift + 2.0 * e * Te / tau
+            cross = self.cross.add(r * o) - mean_r * mean_o
+            spread = self.spread.add(np.outer(o, o)) - np.outer(mean_o, mean_o)
+            if self.cross.full:
+                try:
+                    grad = np.linalg.solve(spread, cross)
+                except np.linalg.LinAlgError:  # no scan yet (a head held still)
+                    grad = None
+                if grad is not None and np.all(np.isfinite(grad)):
+                    # the misalignment of the window's centre, less what the estimate holds
+                    e = -self.width2 * grad - centre
+                    Te, tau = self.system.Te, self.tau
+                    self.turn = self.turn + e * Te / (tau * tau)
+                    self.shift = self.shift + 2.0 * e * Te / tau
         self.report = self.scan.around(self.belief)
         return self.report.copy()
 

@@ -103,7 +103,7 @@ def head_estimator(cfg: RunConfig, system: HeadSystem, model: HeadModel,
         else \
         build_estimator(cfg.estimator, model, particles=cfg.particles)
     scale = (run_noise(cfg, system) if noise is None else noise).scale
-    if scale != 1.0:
+    if scale != 1.0 and hasattr(est, "tell_noise_scale"):  # a filter's model's noise
         est.tell_noise_scale(scale)
     return est
 
@@ -143,10 +143,10 @@ def head_control_step(cfg: RunConfig, system: HeadSystem, model: HeadModel, seed
         floor = (run_noise(cfg, system) if noise is None else noise).std
         # the scanning baselines track on the data detector alone: the quad's fix
         # acquires for them, but never corrects what they track
-        alone = {"reslew": math.inf} if cfg.estimator in SCANNING_ESTIMATORS else {}
         supervisor = HeadSupervisor(est, [AxisRatioModel(model, a) for a in range(2)], slew,
                                     float(model.h(np.zeros(4))[ref]), ref, system.Te,
-                                    floor=floor, **alone)
+                                    floor=floor,
+                                    corrects=cfg.estimator not in SCANNING_ESTIMATORS)
     elif cfg.fast_acquisition:  # the oracle's slew: its estimate is the truth
         supervisor = Unsupervised(est, slew, 0.0)
     else:
