@@ -12,7 +12,7 @@ from ledsim.paper.evaluate import default_checkpoint
 from ledsim.paper.scenarios import Noise, get_scenario, run
 from ledsim.physics.disturbances import DISTURBANCES
 
-PAPER_ESTIMATORS = [n for n in ESTIMATORS if n != "oracle"]
+PAPER_ESTIMATORS = [n for n in ESTIMATORS if n != "oracle" and n not in SCANNING_ESTIMATORS]
 SHORT_SPECS = {"occlusion": "occlusion:start=0.3,duration=0.3",
                "current": "current:speed=0.1,gust=0.05",
                "vibration": "vibration:frequency=3,torque=1,force=4",

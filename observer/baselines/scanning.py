@@ -44,8 +44,7 @@ def dip_radius(system: DiscreteSystem, detector: int, dip: float = DIP) -> float
     lo, hi = 0.0, 1.0
     for _ in range(60):
         mid = 0.5 * (lo + hi)
-        x = np.zeros(system.n_state)
-        x[0] = mid
+        x = np.r_[mid, np.zeros(system.n_state - 1)]  # off on the first axis
         lo, hi = (mid, hi) if system.h(x)[detector] > (1.0 - dip) * peak else (lo, mid)
     return 0.5 * (lo + hi) if n else 0.0
 
