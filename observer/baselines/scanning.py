@@ -39,14 +39,13 @@ FREQUENCY = 0.5
 def dip_radius(system: DiscreteSystem, detector: int, dip: float = DIP) -> float:
     """The angle off the boresight [rad] (on the first axis) at which the detector's
     model power is ``1 - dip`` of its peak: the scan's radius, as a designer tunes it."""
-    n = system.n_state // 2
     peak = float(system.h(np.zeros(system.n_state))[detector])
     lo, hi = 0.0, 1.0
     for _ in range(60):
         mid = 0.5 * (lo + hi)
         x = np.r_[mid, np.zeros(system.n_state - 1)]  # off on the first axis
         lo, hi = (mid, hi) if system.h(x)[detector] > (1.0 - dip) * peak else (lo, mid)
-    return 0.5 * (lo + hi) if n else 0.0
+    return 0.5 * (lo + hi)
 
 
 class CircularScan:
