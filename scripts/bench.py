@@ -32,6 +32,7 @@ from ledsim.experiment.observer_presets import observer_preset
 from ledsim.files.outputs import atomic_write_text
 from ledsim.paper.evaluate import default_checkpoint
 from ledsim.paper.model import LEDLinkModel
+from observer import jit
 from observer.baselines import ExtendedKalmanFilter, ParticleFilter, UnscentedKalmanFilter
 from observer.kkl import checkpoint
 from observer.kkl.training import train_kkl
@@ -136,6 +137,30 @@ def batched_speed(n_worlds: int = 16, threads: int = 1, estimator: str = "kkl",
     runs = [batch_against_rollout(n_worlds, seconds, threads, estimator, supervision)
             for _ in range(repeats)]
     return max(r[0] for r in runs), max(r[1] for r in runs)
+
+
+def compiled_against_reference(repeats: int = 3) -> dict:
+    """The supervised KKL on the compiled path (:mod:`observer.jit`) and on the numpy
+    reference, alternately in this process: the 64 seeds' steps / s against
+    ``mujoco.rollout`` and one seed's us per step (align scenario, one thread). The
+    reference path is the code before the compiled one (``scripts/fingerprint.py``
+    moves 0 runs with ``LEDSIM_COMPILED=0``)."""
+    from observer import jit
+
+    rows = {True: [], False: []}
+    for _ in range(repeats):
+        for compiled in (False, True):
+            with jit.use(compiled):
+                b, r = batched_speed(64, 1, "kkl", True, seconds=1.0, repeats=1)
+                rtf, _ = closed_loop_speed("kkl")
+            rows[compiled].append((b, r, 1e4 / rtf))
+    out = {}
+    for compiled, runs in rows.items():
+        b, r, us = (float(np.median([run[i] for run in runs])) for i in range(3))
+        out["compiled" if compiled else "reference"] = {
+            "steps_per_s_64": b, "rollout_steps_per_s_64": r, "ratio_64": b / r,
+            "us_per_seed_step_64": 1e6 / b, "one_seed_us_per_step": us}
+    return out
 
 
 def closed_loop_speed(estimator: str, integrator: str = "implicitfast") -> tuple[float, float]:
@@ -363,6 +388,22 @@ def main() -> None:
               "gain little; they are most of a step. `docs/bench_batch.md` "
               "(`scripts/bench_batch.py`) measures these figures against an earlier "
               "commit, alternately on the same machine."]
+    ab = compiled_against_reference()
+    c, ref = ab["compiled"], ab["reference"]
+    lines += ["", "## The compiled path against the numpy reference (supervised KKL, one "
+              "thread)", "", f"Compiled kernels {'on' if jit.enabled() else 'off'} for the "
+              "rest of this page (`observer/jit.py`; `LEDSIM_COMPILED=0` turns them off). "
+              "Here both paths alternately in one process, medians of 3: the reference is "
+              "the code before the compiled one, number for number.", "",
+              "| path | 64 seeds: us per seed-step | steps / s | over `mujoco.rollout` "
+              "| one seed: us per step | over the physics floor |", "|---|---|---|---|---|---|"]
+    for name, r in (("numpy reference", ref), ("compiled", c)):
+        lines.append(f"| {name} | {r['us_per_seed_step_64']:.0f} | {r['steps_per_s_64']:.3g} "
+                     f"| {r['ratio_64']:.2f} | {r['one_seed_us_per_step']:.0f} "
+                     f"| {1e6 / bare_sps / r['one_seed_us_per_step']:.2f} |")
+    lines += ["", "Speed-up of the compiled path: "
+              f"{ref['us_per_seed_step_64'] / c['us_per_seed_step_64']:.2f}x on 64 seeds, "
+              f"{ref['one_seed_us_per_step'] / c['one_seed_us_per_step']:.2f}x on one seed."]
     lines += ["", "## Closed loop in MuJoCo (align scenario, 10 s, one core)", "",
               "| estimator | real-time factor of the loop | over the physics floor "
               "| us per step | estimator us / step |", "|---|---|---|---|---|"]
@@ -437,6 +478,13 @@ def main() -> None:
             "batched": [{"estimator": e, "supervision": s, "threads": t,
                          "steps_per_s": b, "rollout_steps_per_s": r, "ratio": b / r}
                         for (e, s, t), (b, r) in batch_rows.items()],
+            # the 64 seeds' supervised KKL (what users sweep and train on), one thread
+            "supervised_64": {"worlds": 64, "steps_per_s": big[0],
+                              "rollout_steps_per_s": big[1], "ratio": big[0] / big[1],
+                              "us_per_seed_step": 1e6 / big[0],
+                              "rollout_us_per_seed_step": 1e6 / big[1]},
+            "one_seed_us_per_step": 1e4 / loop["kkl"][0], "floor_us": 1e6 / bare_sps,
+            "compiled": jit.enabled(), "compiled_against_reference": ab,
             "render_fps": full, "render_fps_bare": bare,
             "transitions_us": trans, "transitions_speedup": ref / trans["batched, 2 threads"],
             "short_run": runs, "import_numpy_mujoco_s": floor_import, "onnx_step": ox,

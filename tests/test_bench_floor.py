@@ -25,7 +25,15 @@ def estimators():
 
 
 def test_stacked_maps_equal_the_seed_by_seed_calls(estimators):
-    e = estimators[0]
+    """The numpy reference's maps, stacked and seed by seed (the compiled maps agree
+    with them to round-off: tests/test_compiled.py)."""
+    from observer import jit
+
+    with jit.use(False):
+        _stacked_equal(estimators[0])
+
+
+def _stacked_equal(e) -> None:
     rng = np.random.default_rng(0)
     lo, hi = e.design.w_range
     ws = list(np.exp(rng.uniform(np.log(lo), np.log(hi), 5)))
@@ -44,7 +52,7 @@ def test_measure_reports_every_part():
     for key in ("loop_sps", "rollout_sps", "physics_us", "maps_one_by_one_us",
                 "maps_stacked_us", "vehicle_us", "sensor_us", "floor_us"):
         assert r[key] > 0, key
-    assert r["maps_stacked_max_difference"] == 0.0
+    assert r["maps_stacked_max_difference"] <= 1e-12  # numpy stacked, compiled one by one
     assert r["floor_us"] > r["estimator_floor_us"] > r["physics_us"]
     assert "| **physics and the maps**" in bench_floor.table(r)
 

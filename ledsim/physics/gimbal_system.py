@@ -210,6 +210,14 @@ class IdentifiedGimbalModel(DiscreteSystem):
             return np.array([k * receiver_response_at(phi + o, r) for o in self._offsets])
         return layout_power(self.power_gain, self.constants.layout.angle(x), self.constants)
 
+    def compiled_h(self) -> tuple:
+        """h as the compiled kernels take it (:mod:`observer.supervision.compiled_monitor`):
+        (the power gain [W], the photodiodes' offsets [rad], the response's a1, b1, c1,
+        a2, b2, c2)."""
+        r = self.constants.receiver
+        return (self.power_gain, np.asarray(self._offsets, dtype=float),
+                np.array([r.a1, r.b1, r.c1, r.a2, r.b2, r.c2], dtype=float))
+
     def step_form(self):
         """f and h for an exported observer (:class:`observer.kkl.export.StepForm`)."""
         return step_form(self.coef_phi, self.coef_rate, self.power_gain, self.constants,

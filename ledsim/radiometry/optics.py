@@ -15,6 +15,8 @@ import math
 import numpy as np
 
 from ledsim.constants import LinkConstants, ReceiverResponse
+from ledsim.radiometry import compiled_optics
+from observer import jit
 from observer.rowops import FLOATS
 
 
@@ -197,6 +199,10 @@ def pair_shape_inverse(powers, c: LinkConstants) -> tuple[float, float, float]:
     if not (p1 > 0 and p2 > 0):
         return math.nan, math.nan, math.inf
     table = _shape_table(c.receiver, c.dphi)
+    if jit.enabled():
+        r = c.receiver
+        return compiled_optics.shape_inverse(p1, p2, table, _SHAPE_PHI, r.a1, r.b1, r.c1,
+                                             r.a2, r.b2, r.c2, float(c.dphi))
     phi = float(np.interp(math.log(p1 / p2), table, _SHAPE_PHI))
     g1, dg1 = response_and_slope(phi, c.receiver)
     g2, dg2 = response_and_slope(phi + c.dphi, c.receiver)
@@ -214,6 +220,11 @@ def pair_phi_variance(phi: float, powers, noise_std: float, c: LinkConstants) ->
     ``noise_std`` [W] on each, at ``phi`` [rad]: the log-ratio's noise
     sigma^2 (1/P1^2 + 1/P2^2) over its squared slope in phi there [rad^2] (inf where
     the slope vanishes)."""
+    if jit.enabled():
+        r = c.receiver
+        return compiled_optics.phi_variance(float(phi), np.asarray(powers, dtype=float),
+                                            float(noise_std), r.a1, r.b1, r.c1, r.a2, r.b2,
+                                            r.c2, float(c.dphi))
     g1, dg1 = response_and_slope(phi, c.receiver)
     g2, dg2 = response_and_slope(phi + c.dphi, c.receiver)
     slope = dg1 / g1 - dg2 / g2

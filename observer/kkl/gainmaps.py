@@ -11,7 +11,13 @@ measured 5-10x less precise for the same features (``docs/ablation.md``).
 
 from __future__ import annotations
 
+import bisect
+import math
+
 import numpy as np
+
+from observer import jit
+from observer.kkl.compiled_maps import interpolated_weights, map_rows
 
 
 def _bracket(grid: np.ndarray, v: float) -> tuple[int, float]:
@@ -21,6 +27,16 @@ def _bracket(grid: np.ndarray, v: float) -> tuple[int, float]:
     v = min(max(v, grid[0]), grid[-1])
     i = int(min(np.searchsorted(grid, v, side="right") - 1, grid.size - 2))
     return i, float((v - grid[i]) / (grid[i + 1] - grid[i]))
+
+
+def _bracket_list(grid: list[float], v: float) -> tuple[int, float]:
+    """:func:`_bracket` on a grid held as a list, in plain floats (a step's few calls)."""
+    n = len(grid)
+    if n == 1:
+        return 0, 0.0
+    v = min(max(v, grid[0]), grid[-1])
+    i = min(bisect.bisect_right(grid, v) - 1, n - 2)
+    return i, (v - grid[i]) / (grid[i + 1] - grid[i])
 
 
 def _kept(cache: dict, key, make, most: int = 8):
@@ -37,6 +53,9 @@ def _kept(cache: dict, key, make, most: int = 8):
 
 
 _TRANSPOSED: dict = {}
+#: Samples up to which a map runs compiled (:mod:`observer.kkl.compiled_maps`): a step's
+#: one or two; a batch (training, the batched observer) stays with numpy's products.
+_FEW = 4
 
 
 def _transposed(W1: np.ndarray) -> list[np.ndarray]:
@@ -75,6 +94,7 @@ class GainTableMap:
         self._b1 = self.b1[None] if self.shared else self.b1
         self._rows: dict = {}
         self._weights: dict = {}
+        self._kernel = self._grids = None  # the compiled path's (kernel_arrays)
 
     @property
     def n_in(self) -> int:
@@ -125,6 +145,9 @@ class GainTableMap:
 
     def __call__(self, v: np.ndarray, w: float, s: float = 1.0) -> np.ndarray:
         """The map at gain w and noise s, on inputs of shape (..., n_in)."""
+        v = np.asarray(v, float)
+        if jit.enabled() and v.size <= _FEW * v.shape[-1] and v.flags.c_contiguous:
+            return self._compiled(v, w, s)
         if self.shared:
             return self.features(v) @ self.weights(w, s).T
         i, a, lo, hi = self.weights(w, s)
@@ -132,6 +155,53 @@ class GainTableMap:
         if a > 0:
             out = out + a * (self.features(v, i + 1) @ hi.T)
         return out
+
+    def kernel_arrays(self) -> tuple:
+        """(hidden layers (n_w or 1, n_in, H), their biases (n_w or 1, H), coef, log_w,
+        log_s): the map as the compiled kernels take it, made once."""
+        if self._kernel is None:
+            self._kernel = (np.ascontiguousarray(np.stack(self._W1T)),
+                            np.ascontiguousarray(self._b1), self.coef, self.log_w, self.log_s)
+            self._last = (None, None)
+        return self._kernel
+
+    def shared_weights(self, w: float, s: float = 1.0) -> np.ndarray:
+        """A shared hidden layer's output weights at (w, s), shape (1, 1, n_out, H + 1),
+        as the kernels take them (interpolated by a kernel, as :meth:`weights` does);
+        the last call's when (w, s) are the same."""
+        coef = self.kernel_arrays()[2]
+        key, C = self._last
+        if key != (w, s):
+            if self._grids is None:
+                self._grids = self.log_w.tolist(), self.log_s.tolist()
+            i, a = _bracket_list(self._grids[0], math.log(w))
+            j, b = _bracket_list(self._grids[1], math.log(s))
+            n_w, n_s = coef.shape[:2]
+            C = interpolated_weights(coef, i, min(i + 1, n_w - 1), a, j, min(j + 1, n_s - 1),
+                                     b)
+            self._last = (w, s), C
+        return C
+
+    def _compiled(self, v: np.ndarray, w: float, s: float) -> np.ndarray:
+        """:meth:`__call__` on a few samples, in one compiled call
+        (:func:`~observer.kkl.compiled_maps.map_rows`). Per-gain hidden layers
+        interpolate their output weights in the noise as they go (the noise moves every
+        step: a cache would miss); a shared one takes :meth:`shared_weights`."""
+        W1T, b1, coef, _, _ = self.kernel_arrays()
+        rows = v.reshape(-1, v.shape[-1])
+        out = np.empty((rows.shape[0], self.n_out))
+        if self.shared:
+            map_rows(rows, W1T, b1, self.shared_weights(w, s), 0, 0, 0.0, 0, 0, 0.0, True,
+                     out)
+        else:
+            if self._grids is None:
+                self._grids = self.log_w.tolist(), self.log_s.tolist()
+            i, a = _bracket_list(self._grids[0], math.log(w))
+            j, b = _bracket_list(self._grids[1], math.log(s))
+            n_w, n_s = coef.shape[:2]
+            map_rows(rows, W1T, b1, coef, i, min(i + 1, n_w - 1), a, j, min(j + 1, n_s - 1),
+                     b, False, out)
+        return out.reshape(v.shape[:-1] + (self.n_out,))
 
     def arrays(self) -> dict[str, np.ndarray]:
         return {"W1": self.W1, "b1": self.b1, "coef": self.coef, "log_w": self.log_w,

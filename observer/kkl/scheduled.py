@@ -28,15 +28,18 @@ import math
 
 import numpy as np
 
+from observer import jit
 from observer.estimator import Estimator, usable_mask
+from observer.kkl import compiled_step
 from observer.kkl.gainmaps import GainTableMap
+from observer.kkl.scheduled_compiled import CompiledPath
 from observer.kkl.scheduled_design import GainSchedule, ScheduledDesign
 from observer.system import DiscreteSystem
 
 __all__ = ["GainSchedule", "ScheduledDesign", "ScheduledKKL"]
 
 
-class ScheduledKKL(Estimator):
+class ScheduledKKL(CompiledPath, Estimator):
     """The gain-scheduled KKL observer (numpy inference).
 
     Args:
@@ -72,6 +75,7 @@ class ScheduledKKL(Estimator):
         self._center = system.domain_center.astype(float).tolist()
         self._half = np.asarray(system.domain_halfwidth, dtype=float).tolist()
         self.noise = 1.0  # measurement noise over the nominal, in the model's gain
+        self._constants = None  # the compiled path's (_kernel_constants)
         self.reset()
 
     @property
@@ -120,12 +124,20 @@ class ScheduledKKL(Estimator):
             return
         x = self._xhat if x is None else x
         if x is not None:
-            self.z = self._enc(x, w) if restart else \
-                self.z + self._enc(x, w) - self._enc(x, self.w)
+            z = self._compiled_gain_change(x, w, restart) if jit.enabled() else None
+            if z is None:
+                z = self._enc(x, w) if restart else \
+                    self.z + self._enc(x, w) - self._enc(x, self.w)
+            self.z = z
         self._gain(w)
 
     def _gain(self, w: float) -> None:
         self.w = w
+        if jit.enabled():
+            d = self.design
+            rates = compiled_step.rate_vector(d.slowest, d.fastest, d.n_rates, d.n_output, w)
+            self._a, self._slowest = self.system.Te * rates, float(rates[0])
+            return
         self._a = self.system.Te * self.design.rate_vector(w)
         self._slowest = self.design.rates(w)[0]
 
@@ -145,6 +157,10 @@ class ScheduledKKL(Estimator):
         every seed). These tests read the estimate's distance from the operating point
         averaged over ``settle_off`` [s], so that a weak link's noise does not trip
         them, or at once for a jump of ``jump`` boxes (a kick)."""
+        if jit.enabled():
+            x = self._compiled_estimate()
+            if x is not None:
+                return x
         sys_, box, sch = self.system, self.design.lock_box, self.schedule
         x = self.decoder_T_star(self.z, self.w, self.noise)
         off = self._box_distance(x, self._center)
@@ -189,6 +205,12 @@ class ScheduledKKL(Estimator):
     def update(self, y) -> np.ndarray:
         y = np.asarray(y, dtype=float)
         self._xhat = self._estimate()
+        if jit.enabled() and (k := self._kernel_constants()) is not None:
+            inside, usable = compiled_step.checks(self._xhat, k[4], k[5], y, k[6], k[7],
+                                                  k[8])
+            if usable:
+                self.outside_domain, self._y = not inside, y
+                return self._xhat
         self.outside_domain = not self.in_domain(self._xhat)
         ok = usable_mask(self.system, y)
         if not ok.all():  # hold the prediction: a missing power is replaced by h(x_hat)
@@ -197,6 +219,15 @@ class ScheduledKKL(Estimator):
         return self._xhat
 
     def predict(self, u) -> None:
+        z = self._compiled_filter(u) if jit.enabled() else None
+        if z is None:
+            z = self._filter(u)
+        self.z = z
+        self._schedule(u)
+
+    def _filter(self, u) -> np.ndarray:
+        """The filters' step on the held sample, and Omega for the input ``u``: z's next
+        value."""
         a = self._a  # 1 - l_i(w)
         z = self.z + a * (self._y[self._channel] - self.z)
         moved = u != self.u_bar if isinstance(u, float | int) else \
@@ -209,7 +240,10 @@ class ScheduledKKL(Estimator):
             # products are the single vector's (a (2, n) matrix's would not be).
             both = self._enc(np.array([driven, f(xh, self.u_bar)])[:, None], self.w)
             z = z + both[0, 0] - both[1, 0]
-        self.z = z
+        return z
+
+    def _schedule(self, u) -> None:
+        """The gain's clock and its schedule after a step under input ``u``."""
         self.k += 1
         sch = self.schedule
         if self._wide:  # no slowing down while the estimate is outside the locked box

@@ -21,7 +21,9 @@ import math
 
 import numpy as np
 
+from observer import jit
 from observer.estimator import usable_mask
+from observer.supervision import compiled_monitor
 from observer.system import DiscreteSystem
 
 
@@ -71,10 +73,27 @@ class ResidualMonitor:
         self.dark_sigmas = dark_sigmas
         self.dark_steps = max(1, int(round(dark_time / system.Te)))
         self.domain_alpha = min(1.0, system.Te / domain_tau)
+        # The compiled path (observer/supervision/compiled_monitor.py), chosen once: a
+        # model that gives its h as numbers, and its state in arrays.
+        h = getattr(system, "compiled_h", None)
+        self._kernel = h() if h is not None and jit.enabled() else None
+        if self._kernel is not None:
+            low, high = system.output_low, system.output_high
+            n = system.n_output
+            self._kernel += (np.zeros(n) if low is None else np.asarray(low, dtype=float),
+                             np.zeros(n) if high is None else np.asarray(high, dtype=float),
+                             low is not None, self.low.astype(float), self.high.astype(float),
+                             np.asarray(self._noise_floor))
+            # y_prev, the averaged estimate, the ring of brightest powers, the counters
+            self._arrays = (np.full(n, np.nan), np.zeros(system.n_state),
+                            np.zeros(self.dark_steps), np.zeros(5))
         self.reset()
 
     def reset(self) -> None:
         """Forget the residual history (after a re-seed); keep the noise level."""
+        if self._kernel is not None:
+            self._compiled_reset()
+            return
         self._mean_residual = [0.0] * self.system.n_output
         self.statistic = 0.0
         self.lost = False
@@ -107,7 +126,11 @@ class ResidualMonitor:
 
     @noise_var.setter
     def noise_var(self, value) -> None:
-        self._noise_var = [float(v) for v in np.broadcast_to(value, self.sigma0.shape)]
+        values = [float(v) for v in np.broadcast_to(value, self.sigma0.shape)]
+        if self._kernel is not None:  # the compiled path's array, in place
+            self._noise_var[:] = values
+        else:
+            self._noise_var = values
 
     def update(self, y: np.ndarray, xhat: np.ndarray) -> bool:
         """Take the measurement y_k and the estimate of x_k; return whether it is lost.
@@ -115,6 +138,8 @@ class ResidualMonitor:
         Missing or impossible samples (see :func:`usable_mask`) leave the residual
         average where it was.
         """
+        if self._kernel is not None:
+            return self._compiled_update(y, xhat)
         ok = usable_mask(self.system, y).tolist()
         y = np.asarray(y, dtype=float).tolist()
         xh = np.asarray(xhat, dtype=float).tolist()
@@ -156,6 +181,29 @@ class ResidualMonitor:
         n = len(bright)
         return n == self.dark_steps and sum(bright) / n <= \
             self.dark_sigmas * math.sqrt(max(self._noise_var) / n)
+
+    def _compiled_reset(self) -> None:
+        """:meth:`reset` of the compiled path's arrays."""
+        if not hasattr(self, "_noise_var"):
+            self._noise_var = np.zeros(self.system.n_output)
+            self.noise_var = self.sigma0**2 * self.noise_ratio**2
+        self._mean_residual = np.zeros(self.system.n_output)
+        self.statistic, self.lost, self.reason = 0.0, False, ""
+        counters = self._arrays[-1]
+        counters[1:] = 0.0  # the averaged estimate, the ring of powers, the statistic
+
+    def _compiled_update(self, y, xhat) -> bool:
+        """:meth:`update` in one compiled call."""
+        code = compiled_monitor.update(
+            np.asarray(y, dtype=float), np.asarray(xhat, dtype=float), *self._kernel,
+            self._mean_residual, self._noise_var, *self._arrays, self.alpha,
+            self.noise_alpha, self.domain_alpha, self.threshold, self.model_error,
+            self.dark_sigmas)
+        self.statistic = float(self._arrays[-1][4])
+        reason = compiled_monitor.REASONS[code]
+        if reason is None:  # no usable sample: the last decision stands
+            return self.lost
+        return self._flag(code != 0, reason)
 
     @property
     def mean_residual(self) -> np.ndarray:
