@@ -72,6 +72,24 @@ def _transposed(W1: np.ndarray) -> list[np.ndarray]:
     return out
 
 
+_STACKED: dict = {}
+
+
+def _stacked(W1: np.ndarray, transposed: list[np.ndarray]) -> np.ndarray:
+    """The hidden layers transposed as one array (n_w or 1, n_in, H), for the kernels;
+    one copy per read-only ``W1``, shared by the maps of many runs as :func:`_transposed`
+    shares its list (a copy each, 64 seeds' decoders did not fit the cache)."""
+    kept = _STACKED.get(id(W1))
+    if kept is not None and kept[0] is W1:
+        return kept[1]
+    out = np.ascontiguousarray(np.stack(transposed))
+    if not W1.flags.writeable:
+        if len(_STACKED) >= 16:
+            _STACKED.clear()
+        _STACKED[id(W1)] = (W1, out)
+    return out
+
+
 class GainTableMap:
     """``coef(log w, log s) @ [tanh(W1 v + b1), 1]``.
 
@@ -160,8 +178,8 @@ class GainTableMap:
         """(hidden layers (n_w or 1, n_in, H), their biases (n_w or 1, H), coef, log_w,
         log_s): the map as the compiled kernels take it, made once."""
         if self._kernel is None:
-            self._kernel = (np.ascontiguousarray(np.stack(self._W1T)),
-                            np.ascontiguousarray(self._b1), self.coef, self.log_w, self.log_s)
+            self._kernel = (_stacked(self.W1, self._W1T), np.ascontiguousarray(self._b1),
+                            self.coef, self.log_w, self.log_s)
             self._last = (None, None)
         return self._kernel
 
