@@ -139,21 +139,22 @@ def batched_speed(n_worlds: int = 16, threads: int = 1, estimator: str = "kkl",
     return max(r[0] for r in runs), max(r[1] for r in runs)
 
 
-def compiled_against_reference(repeats: int = 3) -> dict:
+def compiled_against_reference(repeats: int = 5) -> dict:
     """The supervised KKL on the compiled path (:mod:`observer.jit`) and on the numpy
-    reference, alternately in this process: the 64 seeds' steps / s against
-    ``mujoco.rollout`` and one seed's us per step (align scenario, one thread). The
-    reference path is the code before the compiled one (``scripts/fingerprint.py``
-    moves 0 runs with ``LEDSIM_COMPILED=0``)."""
-    from observer import jit
+    reference, alternately in this process, medians of ``repeats``: the 64 seeds' steps
+    / s (0.5 s of the align scenario) against ``mujoco.rollout`` and one seed's us per
+    step (10 s), one thread. The reference path is the code before the compiled one
+    (``scripts/fingerprint.py`` moves 0 runs with ``LEDSIM_COMPILED=0``)."""
+    from ledsim.loop.closed_loop import run_once
+    from ledsim.loop.run_config import RunConfig
 
     rows = {True: [], False: []}
     for _ in range(repeats):
         for compiled in (False, True):
             with jit.use(compiled):
-                b, r = batched_speed(64, 1, "kkl", True, seconds=1.0, repeats=1)
-                rtf, _ = closed_loop_speed("kkl")
-            rows[compiled].append((b, r, 1e4 / rtf))
+                b, r = batch_against_rollout(64, 0.5, 1, "kkl", True)
+                out = run_once(RunConfig(scenario="align", estimator="kkl"), seed=0)
+            rows[compiled].append((b, r, 1e4 / out.realtime_factor))
     out = {}
     for compiled, runs in rows.items():
         b, r, us = (float(np.median([run[i] for run in runs])) for i in range(3))
@@ -393,7 +394,7 @@ def main() -> None:
     lines += ["", "## The compiled path against the numpy reference (supervised KKL, one "
               "thread)", "", f"Compiled kernels {'on' if jit.enabled() else 'off'} for the "
               "rest of this page (`observer/jit.py`; `LEDSIM_COMPILED=0` turns them off). "
-              "Here both paths alternately in one process, medians of 3: the reference is "
+              "Here both paths alternately in one process, medians of 5: the reference is "
               "the code before the compiled one, number for number.", "",
               "| path | 64 seeds: us per seed-step | steps / s | over `mujoco.rollout` "
               "| one seed: us per step | over the physics floor |", "|---|---|---|---|---|---|"]

@@ -173,3 +173,49 @@ def test_the_compiled_monitor_decides_as_the_reference():
             assert np.allclose(ref.noise_var, com.noise_var, rtol=1e-14, atol=0), k
     assert {"", "no light", "non-finite estimate", "estimate outside the domain",
             "output residual above the noise"} <= reasons
+
+
+def test_the_compiled_gain_tracker_and_fading_channel_follow_the_reference():
+    """A fading pair (scintillation on both photodiodes, a drifting gain, the encoder
+    turning), with dark and missing samples: every state of the tracker and its channel
+    to round-off at every step, and the same decisions (the fade learned, the ratio
+    moved)."""
+    from ledsim.agent.link_gain import link_gain_tracker
+    from ledsim.loop.build.estimation import identified_model
+    from ledsim.physics.gimbal_system import GimbalSystem
+    from ledsim.physics.scene import WorldConfig
+
+    system = GimbalSystem(WorldConfig())
+    model, c = identified_model(system), system.constants
+    with jit.use(False):
+        ref = link_gain_tracker(model, c, 1.1)
+    with jit.use(True):
+        com = link_gain_tracker(model, c, 1.1)
+    rng = np.random.default_rng(7)
+    n = 1500
+    phi = 0.05 * np.sin(np.arange(n) * 0.01)
+    gain = 1.1 * np.exp(np.cumsum(rng.normal(scale=2e-3, size=n)))
+    fade = np.exp(rng.normal(scale=0.2, size=n))
+    y = (gain * fade)[:, None] * np.array([model.h(np.array([p, 0.0])) for p in phi])
+    y += rng.normal(scale=float(np.mean(model.measurement_noise_std)), size=y.shape)
+    y[300:320] = 0.0
+    y[600:610, 0] = np.nan
+    q = -phi + 0.001 * rng.normal(size=n)
+    fades = []
+    for k in range(n):
+        qk = None if 800 <= k < 850 else float(q[k])
+        for tracker, compiled in ((ref, False), (com, True)):
+            with jit.use(compiled):
+                tracker.sample(y[k], qk, 1e-8)
+                tracker.update(y[k])
+        fades.append(ref.fade)
+        assert abs(ref.fade - com.fade) <= 1e-12 * ref.fade, k
+        for a, b in ((ref._s, com._s), (ref._P, com._P), ((ref.ratio,), (com.ratio,))):
+            assert np.allclose(a, b, rtol=1e-12, atol=1e-300), k
+        ch, cc = ref.channel, com.channel
+        assert ch._learned == cc._learned and (ch._last is None) == (cc._last is None), k
+        assert np.allclose([ch.step_variance, ch.noise_variance, ch.shape_step_variance,
+                            ch.shape_noise_variance],
+                           [cc.step_variance, cc.noise_variance, cc.shape_step_variance,
+                            cc.shape_noise_variance], rtol=1e-12, atol=0), k
+    assert max(fades) > 1.1 and ref.ratio != 1.1  # a fade was learned, the gain moved

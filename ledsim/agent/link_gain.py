@@ -11,6 +11,7 @@ from ledsim.radiometry.optics import (
     nominal_noise_std,
     pair_phi_variance,
     pair_shape_inverse,
+    pair_shape_numbers,
     peak_power,
 )
 from observer.supervision.gain_tracking import GainTracker
@@ -52,4 +53,4 @@ def link_gain_tracker(model, constants: LinkConstants, ratio: float = 1.0) -> Ga
                        model_gain(model, constants), ratio=ratio, deadband=band,
                        deadband_moving=band,
                        phi_variance=lambda phi, y, sigma: pair_phi_variance(
-                           phi, y, sigma, constants))
+                           phi, y, sigma, constants), shape=pair_shape_numbers(constants))

@@ -15,9 +15,9 @@ import math
 import numpy as np
 
 from ledsim.constants import LinkConstants, ReceiverResponse
-from ledsim.radiometry import compiled_optics
 from observer import jit
 from observer.rowops import FLOATS
+from observer.supervision import compiled_pair
 
 
 def response_terms(phi, r: ReceiverResponse, exp=np.exp):
@@ -201,7 +201,7 @@ def pair_shape_inverse(powers, c: LinkConstants) -> tuple[float, float, float]:
     table = _shape_table(c.receiver, c.dphi)
     if jit.enabled():
         r = c.receiver
-        return compiled_optics.shape_inverse(p1, p2, table, _SHAPE_PHI, r.a1, r.b1, r.c1,
+        return compiled_pair.shape_inverse(p1, p2, table, _SHAPE_PHI, r.a1, r.b1, r.c1,
                                              r.a2, r.b2, r.c2, float(c.dphi))
     phi = float(np.interp(math.log(p1 / p2), table, _SHAPE_PHI))
     g1, dg1 = response_and_slope(phi, c.receiver)
@@ -222,7 +222,7 @@ def pair_phi_variance(phi: float, powers, noise_std: float, c: LinkConstants) ->
     the slope vanishes)."""
     if jit.enabled():
         r = c.receiver
-        return compiled_optics.phi_variance(float(phi), np.asarray(powers, dtype=float),
+        return compiled_pair.phi_variance(float(phi), np.asarray(powers, dtype=float),
                                             float(noise_std), r.a1, r.b1, r.c1, r.a2, r.b2,
                                             r.c2, float(c.dphi))
     g1, dg1 = response_and_slope(phi, c.receiver)
@@ -231,6 +231,15 @@ def pair_phi_variance(phi: float, powers, noise_std: float, c: LinkConstants) ->
     if slope == 0:
         return math.inf
     return noise_std * noise_std * sum(1.0 / (p * p) for p in powers) / (slope * slope)
+
+
+def pair_shape_numbers(c: LinkConstants) -> tuple:
+    """The pair's shape as the compiled kernels take it
+    (:mod:`observer.supervision.compiled_pair`): (the table of log(g1 / g2), its phis
+    [rad], the response's a1, b1, c1, a2, b2, c2, dphi [rad])."""
+    r = c.receiver
+    return (_shape_table(r, c.dphi), _SHAPE_PHI, r.a1, r.b1, r.c1, r.a2, r.b2, r.c2,
+            float(c.dphi))
 
 
 def response_and_slope(phi: float, r: ReceiverResponse) -> tuple[float, float]:

@@ -20,30 +20,32 @@ class CompiledPath:
     def _kernel_constants(self) -> tuple | None:
         """What the kernels take of the model and the maps, made once (again when a map
         is replaced; None: a map is not a :class:`GainTableMap`, for the reference)."""
+        k = self._constants
+        if k is not None:  # the maps it was made of are still the observer's
+            enc, dec, loc = k[-1]
+            if enc is self.encoder_T and dec is self.decoder_T_star and \
+                    loc is self.decoder_locked:
+                return k
         maps = (self.encoder_T, self.decoder_T_star, self.decoder_locked)
-        if self._constants is None or any(
-                a is not b for a, b in zip(self._constants[-1], maps, strict=True)):
-            if not all(isinstance(m, GainTableMap) for m in maps if m is not None):
-                return None
-            self._constants = None
-        if self._constants is None:
-            sys_ = self.system
-            loc = self.decoder_locked or self.decoder_T_star  # a stand-in when none
-            out_lo = sys_.output_low
-            bounded = out_lo is not None
-            y_lo = np.asarray(out_lo if bounded else [0.0], dtype=float)
-            y_hi = np.asarray(sys_.output_high if bounded else [0.0], dtype=float)
-            coefs = getattr(sys_, "coef_phi", None), getattr(sys_, "coef_rate", None)
-            # Omega compiled: the identified one-step model on one axis, a shared encoder
-            identified = coefs[0] is not None and sys_.n_state == 2 and \
-                self.encoder_T.shared
-            self._constants = (
-                self.decoder_T_star.kernel_arrays(), loc.kernel_arrays(),
-                np.asarray(self._center), np.asarray(self._half),
-                np.asarray(sys_.domain_low, dtype=float),
-                np.asarray(sys_.domain_high, dtype=float), y_lo, y_hi, bounded,
-                tuple(np.asarray(c, dtype=float) for c in coefs) if identified else None,
-                maps)
+        if not all(isinstance(m, GainTableMap) for m in maps if m is not None):
+            return None
+        sys_ = self.system
+        loc = self.decoder_locked or self.decoder_T_star  # a stand-in when none
+        out_lo = sys_.output_low
+        bounded = out_lo is not None
+        y_lo = np.asarray(out_lo if bounded else [0.0], dtype=float)
+        y_hi = np.asarray(sys_.output_high if bounded else [0.0], dtype=float)
+        coefs = getattr(sys_, "coef_phi", None), getattr(sys_, "coef_rate", None)
+        # Omega compiled: the identified one-step model on one axis, a shared encoder
+        identified = coefs[0] is not None and sys_.n_state == 2 and \
+            self.encoder_T.shared
+        self._constants = (
+            self.decoder_T_star.kernel_arrays(), loc.kernel_arrays(),
+            np.asarray(self._center), np.asarray(self._half),
+            np.asarray(sys_.domain_low, dtype=float),
+            np.asarray(sys_.domain_high, dtype=float), y_lo, y_hi, bounded,
+            tuple(np.asarray(c, dtype=float) for c in coefs) if identified else None,
+            maps)
         return self._constants
 
     def _compiled_estimate(self) -> np.ndarray | None:

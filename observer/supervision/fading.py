@@ -25,6 +25,11 @@ from __future__ import annotations
 
 import math
 
+import numpy as np
+
+from observer import jit
+from observer.supervision import compiled_gain
+
 
 class FadingChannel:
     """What a fading channel does to the pair of powers, learned online.
@@ -43,6 +48,8 @@ class FadingChannel:
         max_std: samples whose log-gain standard deviation exceeds this are not used
             (the gain tracker's rule: far off the peak, or a pair an occluder shades on
             one side, whose shape lies about phi and the gain alike) [-].
+        shape: the same pair as numbers, for the compiled path
+            (:mod:`observer.supervision.compiled_pair`; None: the reference only).
     """
 
     #: Pairs of successive samples a fading is learned from before it is believed: 50
@@ -50,8 +57,10 @@ class FadingChannel:
     MIN_LEARNED = 50
 
     def __init__(self, Te: float, shape_inverse, model_gain: float, phi_variance=None,
-                 min_snr: float = 5.0, time: float = 1.0, max_std: float = 0.3):
+                 min_snr: float = 5.0, time: float = 1.0, max_std: float = 0.3,
+                 shape: tuple | None = None):
         self.shape_inverse = shape_inverse
+        self.shape = shape
         self.model_gain = float(model_gain)
         self.phi_variance = phi_variance
         self.min_snr = float(min_snr)
@@ -89,6 +98,8 @@ class FadingChannel:
         estimator sees the gain ``ratio`` times the model's: learn the fading from the
         sample's own gain and shape, and set its fade (1: no fading learned, or the
         sample cannot be inverted). Returns the fade [-]."""
+        if self.shape is not None and jit.enabled():
+            return self._compiled_sample(y, q, sigma, ratio)
         self.fade = 1.0
         y = [float(v) for v in y]
         if not all(math.isfinite(v) and v > self.min_snr * sg
@@ -131,6 +142,28 @@ class FadingChannel:
         if fading > 0.0:  # the common scale carries mostly the fade
             share = fading / (fading + noise)
             self.fade = math.exp(share * (log_gain - math.log(ratio)))
+        return self.fade
+
+
+    def _compiled_sample(self, y, q: float | None, sigma: list, ratio: float) -> float:
+        """:meth:`sample` in one compiled call, on this object's own state."""
+        last = self._last
+        state = np.array([0.0, 0.0, 0.0, 0.0, 0.0, self._learned, self.step_variance,
+                          self.noise_variance, self.shape_step_variance,
+                          self.shape_noise_variance])
+        if last is not None:
+            state[:5] = 1.0, last[0], last[1], 0.0 if last[2] is None else last[2], \
+                last[2] is not None
+        self.fade = compiled_gain.fading_sample(
+            np.asarray(y, dtype=float), 0.0 if q is None else float(q), q is not None,
+            np.asarray(sigma, dtype=float), float(ratio), self.min_snr, self.model_gain,
+            self.max_variance, self.alpha, float(self.MIN_LEARNED),
+            self.phi_variance is not None, *self.shape, state)
+        kept, log_gain, phi, _, has_q, learned, *variances = state.tolist()
+        self._last = (log_gain, phi, q if has_q else None) if kept else None
+        self._learned = int(learned)
+        (self.step_variance, self.noise_variance, self.shape_step_variance,
+         self.shape_noise_variance) = variances
         return self.fade
 
 

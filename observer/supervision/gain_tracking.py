@@ -8,6 +8,8 @@ import math
 
 import numpy as np
 
+from observer import jit
+from observer.supervision import compiled_gain
 from observer.supervision.fading import FadingChannel
 from observer.system import DiscreteSystem
 
@@ -60,13 +62,15 @@ class GainTracker:
         max_std: samples whose log-gain standard deviation exceeds this are not used
             (at 0.1 it went blind 0.06 rad off the peak at d = 0.15 m: 9% gain drift).
         fade_time, phi_variance: the :class:`~observer.supervision.fading.FadingChannel`'s.
+        shape: the receiver's pair as numbers, for the compiled path
+            (:mod:`observer.supervision.compiled_pair`; None: the reference only).
     """
 
     def __init__(self, system: DiscreteSystem, shape_inverse, model_gain: float,
                  drift: float = 0.05, ratio: float = 1.0, min_snr: float = 5.0,
                  tau_powers: float = 0.1, deadband: float = 0.005,
                  deadband_moving: float = 0.005, max_std: float = 0.3,
-                 fade_time: float = 1.0, phi_variance=None):
+                 fade_time: float = 1.0, phi_variance=None, shape: tuple | None = None):
         self.system = system
         self.shape_inverse = shape_inverse
         self.model_gain = float(model_gain)
@@ -85,8 +89,9 @@ class GainTracker:
         self._nominal_sigma = np.asarray(system.measurement_noise_std, dtype=float).tolist()
         self._min_snr = float(min_snr)
         self._sigma: list | None = None  # the last noise level update() was given [W]
+        self.shape = shape
         self.channel = FadingChannel(Te, shape_inverse, self.model_gain, phi_variance,
-                                     min_snr, fade_time)
+                                     min_snr, fade_time, shape=shape)
         self.set(ratio, variance=0.0)
 
     @property
@@ -133,6 +138,9 @@ class GainTracker:
     def update(self, y: np.ndarray, noise_std: np.ndarray | None = None) -> None:
         """Learn from one sample of raw powers ``y`` [W] (``noise_std``: the measured
         noise level [W], default the model's scaled by the ratio)."""
+        if self.shape is not None and jit.enabled():
+            self._compiled_update(y, noise_std)
+            return
         Te, (q00, q01, q11) = self.Te, self._Q
         s0, s1 = self._s
         p00, p01, p11 = self._P
@@ -176,6 +184,25 @@ class GainTracker:
         moving = abs(self._s[1]) > 3 * math.sqrt(self._P[2])
         est, band = self.estimate, self.deadband_moving if moving else self.deadband
         self.ratio = min(max(self.ratio, est / (1 + band)), est / (1 - band))
+
+    def _compiled_update(self, y, noise_std) -> None:
+        """:meth:`update` in one compiled call, on this object's own state."""
+        sigma = ([v * self.ratio for v in self._nominal_sigma] if noise_std is None
+                 else np.asarray(noise_std, dtype=float).tolist())
+        kept = self._powers is not None
+        state = np.array([*self._s, *self._P, kept, 0.0 if not kept else self._lag,
+                          self.ratio])
+        powers = np.array(self._powers if kept else [0.0] * len(sigma))
+        if compiled_gain.gain_update(np.asarray(y, dtype=float), np.asarray(sigma), state,
+                                     powers, self.Te, *self._Q, self.alpha_powers,
+                                     self._min_snr, self.model_gain,
+                                     self.channel.fade_variance, self.max_variance,
+                                     self.deadband, self.deadband_moving, *self.shape):
+            self._sigma = sigma
+        s0, s1, p00, p01, p11, kept, lag, ratio = state.tolist()
+        self._s, self._P, self.ratio = (s0, s1), (p00, p01, p11), ratio
+        if kept:
+            self._powers, self._lag = powers.tolist(), lag
 
     @property
     def powers(self) -> np.ndarray | None:

@@ -1,8 +1,11 @@
-"""The receiver's per-step optics, compiled: the pair's shape inversion and the variance
-of the phi it gives (:func:`~ledsim.radiometry.optics.pair_shape_inverse`,
-:func:`~ledsim.radiometry.optics.pair_phi_variance`, which stay the reference and call
-these when :func:`observer.jit.enabled`). The same formulas in the same order; np.interp
-is a binary search on the same table."""
+"""A pair of photodiodes with the two-Gaussian response, compiled: its shape inversion and
+the variance of the phi it gives (``ledsim.radiometry.optics.pair_shape_inverse`` and
+``pair_phi_variance`` stay the reference and call these when :func:`observer.jit.enabled`),
+and the fading channel's and the gain tracker's steps built on them
+(:mod:`observer.supervision.compiled_gain`). The same formulas in the same order;
+np.interp is a binary search on the same table. A receiver passes its numbers as
+``shape``: (the shape table log(g1 / g2), its phis [rad], the response's (a1, b1, c1,
+a2, b2, c2), dphi [rad])."""
 
 from __future__ import annotations
 
@@ -56,6 +59,15 @@ def shape_inverse(p1: float, p2: float, table: np.ndarray, phis: np.ndarray, a1:
     if det == 0 or gain <= 0:
         return phi, gain, math.inf
     return phi, gain, (d1 * d1 + d2 * d2) / det**2 / gain**2
+
+
+@njit()
+def pair_inverse(pair: np.ndarray, table: np.ndarray, phis: np.ndarray, a1: float,
+                 b1: float, c1: float, a2: float, b2: float, c2: float,
+                 dphi: float) -> tuple[float, float, float]:
+    """:func:`shape_inverse` of a pair of powers [W] held as an array: the pair's formula
+    reads its two photodiodes by position, as the reference's does (optics.py)."""
+    return shape_inverse(pair[0], pair[1], table, phis, a1, b1, c1, a2, b2, c2, dphi)
 
 
 @njit()
