@@ -1,7 +1,8 @@
 # Two entry points: `make demo` (main job on shipped defaults) and `make test`.
 # Both install what they need and can run twice: `make demo` Debian's libosmesa6, a
-# .venv and ledsim without torch (running observers needs none); `make test` also CPU
-# PyTorch (training), the dev tools and every optional extra the tests use.
+# .venv and ledsim without torch (running observers needs none), and compiles the control
+# step's kernels once (numba); `make test` also CPU PyTorch (training), the dev tools and
+# every optional extra the tests use.
 PY      ?= python3
 VENV    := .venv
 BIN     := $(VENV)/bin
@@ -20,6 +21,7 @@ $(STAMP): pyproject.toml
 	@bash scripts/install_system_deps.sh
 	@test -x $(BIN)/python || $(PY) -m venv $(VENV)
 	$(BIN)/pip install -q -e . $(EDITABLE)
+	MUJOCO_GL=osmesa $(BIN)/python -m ledsim.loop.warm
 	@touch $(STAMP)
 
 $(STAMP_ALL): $(STAMP)

@@ -8,18 +8,20 @@ the environment, everything runs the reference path. The two agree to round-off
 closed-loop run may part from the reference's in the last bits.
 
 Kernels are compiled on their first call and cached on disk beside the module
-(``cache=True``): the first run in a fresh checkout pays a few seconds once.
+(``cache=True``): the first run in a fresh checkout pays a few seconds once
+(``python -m ledsim.loop.warm``, which ``make`` runs, pays them at install). numba itself
+is imported with the first kernel module a run uses (:func:`lazy`), not with this one: a
+process that never runs a kernel does not pay its import (0.25 s).
 """
 
 from __future__ import annotations
 
+import importlib
+import importlib.util
 import os
 from contextlib import contextmanager
 
-try:
-    import numba
-except ImportError:  # the reference path runs everywhere
-    numba = None
+_installed = importlib.util.find_spec("numba") is not None
 
 #: The environment variable that turns the compiled path off ("0", "false", "no", "off").
 SWITCH = "LEDSIM_COMPILED"
@@ -27,11 +29,11 @@ SWITCH = "LEDSIM_COMPILED"
 
 def installed() -> bool:
     """numba can be imported."""
-    return numba is not None
+    return _installed
 
 
 def _from_environment() -> bool:
-    return numba is not None and \
+    return _installed and \
         os.environ.get(SWITCH, "1").strip().lower() not in ("0", "false", "no", "off")
 
 
@@ -50,7 +52,7 @@ def use(compiled: bool):
     the numpy reference (``False``); the previous choice after it."""
     global _enabled
     before = _enabled
-    _enabled = bool(compiled) and numba is not None
+    _enabled = bool(compiled) and _installed
     try:
         yield
     finally:
@@ -65,6 +67,22 @@ def njit(*args, **kwargs):
     # numpy's error model: a division by zero gives inf or NaN, as in numpy, and the
     # loops vectorise (Python's model checks every division).
     kwargs.setdefault("error_model", "numpy")
-    if numba is None:
+    if not _installed:
         return args[0] if args and callable(args[0]) else (lambda f: f)
+    import numba
+
     return numba.njit(*args, **kwargs)
+
+
+class lazy:  # noqa: N801 (used as a module)
+    """A kernel module imported on first use: ``compiled_step = lazy("observer.kkl.
+    compiled_step")``, then ``compiled_step.estimate(...)``. The first attribute read
+    imports it and copies its names here, so later reads cost what a module's do."""
+
+    def __init__(self, name: str):
+        self._module_name = name
+
+    def __getattr__(self, attr: str):  # only for names not copied yet
+        module = importlib.import_module(self._module_name)
+        self.__dict__.update(vars(module))
+        return getattr(module, attr)

@@ -219,3 +219,14 @@ def test_the_compiled_gain_tracker_and_fading_channel_follow_the_reference():
                            [cc.step_variance, cc.noise_variance, cc.shape_step_variance,
                             cc.shape_noise_variance], rtol=1e-12, atol=0), k
     assert max(fades) > 1.1 and ref.ratio != 1.1  # a fade was learned, the gain moved
+
+
+def test_the_warm_up_says_when_the_compiled_path_is_off():
+    import os
+    import subprocess
+    import sys
+
+    env = dict(os.environ, LEDSIM_COMPILED="0")
+    p = subprocess.run([sys.executable, "-m", "ledsim.loop.warm"], capture_output=True,
+                       text=True, env=env, timeout=120)
+    assert p.returncode == 0 and "the compiled path is off" in p.stdout, p.stderr

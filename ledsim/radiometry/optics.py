@@ -17,7 +17,8 @@ import numpy as np
 from ledsim.constants import LinkConstants, ReceiverResponse
 from observer import jit
 from observer.rowops import FLOATS
-from observer.supervision import compiled_pair
+
+compiled_pair = jit.lazy("observer.supervision.compiled_pair")
 
 
 def response_terms(phi, r: ReceiverResponse, exp=np.exp):

@@ -17,7 +17,8 @@ import math
 import numpy as np
 
 from observer import jit
-from observer.kkl.compiled_maps import interpolated_weights, map_rows
+
+compiled_maps = jit.lazy("observer.kkl.compiled_maps")
 
 
 def _bracket(grid: np.ndarray, v: float) -> tuple[int, float]:
@@ -195,8 +196,8 @@ class GainTableMap:
             i, a = _bracket_list(self._grids[0], math.log(w))
             j, b = _bracket_list(self._grids[1], math.log(s))
             n_w, n_s = coef.shape[:2]
-            C = interpolated_weights(coef, i, min(i + 1, n_w - 1), a, j, min(j + 1, n_s - 1),
-                                     b)
+            C = compiled_maps.interpolated_weights(coef, i, min(i + 1, n_w - 1), a, j,
+                                                   min(j + 1, n_s - 1), b)
             self._last = (w, s), C
         return C
 
@@ -209,16 +210,16 @@ class GainTableMap:
         rows = v.reshape(-1, v.shape[-1])
         out = np.empty((rows.shape[0], self.n_out))
         if self.shared:
-            map_rows(rows, W1T, b1, self.shared_weights(w, s), 0, 0, 0.0, 0, 0, 0.0, True,
-                     out)
+            compiled_maps.map_rows(rows, W1T, b1, self.shared_weights(w, s), 0, 0, 0.0, 0, 0,
+                                   0.0, True, out)
         else:
             if self._grids is None:
                 self._grids = self.log_w.tolist(), self.log_s.tolist()
             i, a = _bracket_list(self._grids[0], math.log(w))
             j, b = _bracket_list(self._grids[1], math.log(s))
             n_w, n_s = coef.shape[:2]
-            map_rows(rows, W1T, b1, coef, i, min(i + 1, n_w - 1), a, j, min(j + 1, n_s - 1),
-                     b, False, out)
+            compiled_maps.map_rows(rows, W1T, b1, coef, i, min(i + 1, n_w - 1), a, j,
+                                   min(j + 1, n_s - 1), b, False, out)
         return out.reshape(v.shape[:-1] + (self.n_out,))
 
     def arrays(self) -> dict[str, np.ndarray]:

@@ -30,11 +30,12 @@ import numpy as np
 
 from observer import jit
 from observer.estimator import Estimator, usable_mask
-from observer.kkl import compiled_step
 from observer.kkl.gainmaps import GainTableMap
 from observer.kkl.scheduled_compiled import CompiledPath
 from observer.kkl.scheduled_design import GainSchedule, ScheduledDesign
 from observer.system import DiscreteSystem
+
+compiled_step = jit.lazy("observer.kkl.compiled_step")
 
 __all__ = ["GainSchedule", "ScheduledDesign", "ScheduledKKL"]
 

@@ -7,8 +7,10 @@ from __future__ import annotations
 
 import numpy as np
 
-from observer.kkl import compiled_step
+from observer import jit
 from observer.kkl.gainmaps import GainTableMap
+
+compiled_step = jit.lazy("observer.kkl.compiled_step")
 
 
 class CompiledPath:

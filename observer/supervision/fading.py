@@ -28,7 +28,8 @@ import math
 import numpy as np
 
 from observer import jit
-from observer.supervision import compiled_gain
+
+compiled_gain = jit.lazy("observer.supervision.compiled_gain")
 
 
 class FadingChannel:

@@ -9,9 +9,10 @@ import math
 import numpy as np
 
 from observer import jit
-from observer.supervision import compiled_gain
 from observer.supervision.fading import FadingChannel
 from observer.system import DiscreteSystem
+
+compiled_gain = jit.lazy("observer.supervision.compiled_gain")
 
 
 class GainTracker:

@@ -23,8 +23,9 @@ import numpy as np
 
 from observer import jit
 from observer.estimator import usable_mask
-from observer.supervision import compiled_monitor
 from observer.system import DiscreteSystem
+
+compiled_monitor = jit.lazy("observer.supervision.compiled_monitor")
 
 
 class ResidualMonitor:
