@@ -200,10 +200,10 @@ def transition_speed(n: int = 20_000) -> dict[str, float]:
     return out
 
 
-def short_run(plot: bool, seconds: float = 10.0) -> dict:
+def short_run(plot: bool, seconds: float = 10.0, compiled: bool = True) -> dict:
     """Wall time [s] of ``ledsim run --seeds 1 --seconds S`` (align scenario) in a fresh
     process, the share of it spent simulating (S over the run's real-time factor), and
-    whether torch was imported."""
+    whether torch was imported; ``compiled`` False: with ``LEDSIM_COMPILED=0``."""
     import subprocess
     import sys
     import tempfile
@@ -213,13 +213,15 @@ def short_run(plot: bool, seconds: float = 10.0) -> dict:
                "--seconds", f"{seconds:g}", "-q", "--out", f"{tmp}/o"] + \
             ([] if plot else ["--no-plot"])
         t0 = time.perf_counter()
-        r = subprocess.run(cmd, capture_output=True, text=True, check=True)
+        env = dict(os.environ, LEDSIM_COMPILED="1" if compiled else "0")
+        r = subprocess.run(cmd, capture_output=True, text=True, check=True, env=env)
         wall = time.perf_counter() - t0
         res = json.loads(Path(f"{tmp}/o/results.json").read_text())
     sim = res["seconds"] / res["realtime_factor"]["mean"]
     torch_imported = any(line.rstrip().endswith("| torch") for line in r.stderr.splitlines())
     return {"seconds": seconds, "wall_s": wall, "simulating_s": sim,
-            "simulating_share": sim / wall, "imports_torch": torch_imported}
+            "simulating_share": sim / wall, "imports_torch": torch_imported,
+            "compiled": compiled}
 
 
 def onnx_step_speed(steps: int = 2000) -> dict:
@@ -424,18 +426,22 @@ def main() -> None:
     for label, us in trans.items():
         lines.append(f"| {label} | {us:.1f} | {ref / us:.2f}x |")
     runs = {"plots": short_run(True), "no_plot": short_run(False),
-            "no_plot_60s": short_run(False, 60.0)}
+            "no_plot_reference": short_run(False, compiled=False),
+            "no_plot_60s": short_run(False, 60.0),
+            "no_plot_60s_reference": short_run(False, 60.0, compiled=False)}
     floor_import = import_floor()
     lines += ["", "## A short `ledsim run` (one seed, align scenario, fresh process)", "",
-              "| simulated [s] | plots | wall time [s] | simulating [s] | share simulating "
-              "| imports torch |", "|---|---|---|---|---|---|"]
+              "| simulated [s] | plots | path | wall time [s] | simulating [s] "
+              "| share simulating | imports torch |", "|---|---|---|---|---|---|---|"]
     for key, r in runs.items():
         lines.append(f"| {r['seconds']:g} | {'on' if key == 'plots' else '`--no-plot`'} "
+                     f"| {'compiled' if r['compiled'] else '`LEDSIM_COMPILED=0`'} "
                      f"| {r['wall_s']:.2f} | {r['simulating_s']:.2f} "
                      f"| {r['simulating_share']:.0%} "
                      f"| {'yes' if r['imports_torch'] else 'no'} |")
     lines += ["", "The rest is Python's start, importing numpy and MuJoCo, building the "
-              "scene, fitting the identified model (4000 transitions, batched) and, with "
+              "scene, fitting the identified model (4000 transitions, batched), on the "
+              "compiled path importing numba and loading the cached kernels and, with "
               "plots, importing matplotlib and drawing. The shipped observers load "
               "without torch (`.safetensors` files). A fresh Python that only imports "
               f"numpy and MuJoCo takes {floor_import:.2f} s: longer than the 10 s run "
