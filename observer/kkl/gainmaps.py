@@ -191,15 +191,19 @@ class GainTableMap:
         coef = self.kernel_arrays()[2]
         key, C = self._last
         if key != (w, s):
-            if self._grids is None:
-                self._grids = self.log_w.tolist(), self.log_s.tolist()
-            i, a = _bracket_list(self._grids[0], math.log(w))
-            j, b = _bracket_list(self._grids[1], math.log(s))
-            n_w, n_s = coef.shape[:2]
-            C = compiled_maps.interpolated_weights(coef, i, min(i + 1, n_w - 1), a, j,
-                                                   min(j + 1, n_s - 1), b)
+            C = compiled_maps.interpolated_weights(coef, *self._brackets(w, s))
             self._last = (w, s), C
         return C
+
+    def _brackets(self, w: float, s: float) -> tuple:
+        """(i, i + 1, a, j, j + 1, b): the grid gains around w and the grid noises around
+        s, each clipped to its grid, and where w and s lie between them."""
+        if self._grids is None:
+            self._grids = self.log_w.tolist(), self.log_s.tolist()
+        i, a = _bracket_list(self._grids[0], math.log(w))
+        j, b = _bracket_list(self._grids[1], math.log(s))
+        n_w, n_s = self.coef.shape[:2]
+        return i, min(i + 1, n_w - 1), a, j, min(j + 1, n_s - 1), b
 
     def _compiled(self, v: np.ndarray, w: float, s: float) -> np.ndarray:
         """:meth:`__call__` on a few samples, in one compiled call
@@ -213,13 +217,7 @@ class GainTableMap:
             compiled_maps.map_rows(rows, W1T, b1, self.shared_weights(w, s), 0, 0, 0.0, 0, 0,
                                    0.0, True, out)
         else:
-            if self._grids is None:
-                self._grids = self.log_w.tolist(), self.log_s.tolist()
-            i, a = _bracket_list(self._grids[0], math.log(w))
-            j, b = _bracket_list(self._grids[1], math.log(s))
-            n_w, n_s = coef.shape[:2]
-            compiled_maps.map_rows(rows, W1T, b1, coef, i, min(i + 1, n_w - 1), a, j,
-                                   min(j + 1, n_s - 1), b, False, out)
+            compiled_maps.map_rows(rows, W1T, b1, coef, *self._brackets(w, s), False, out)
         return out.reshape(v.shape[:-1] + (self.n_out,))
 
     def arrays(self) -> dict[str, np.ndarray]:

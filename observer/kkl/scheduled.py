@@ -41,7 +41,8 @@ __all__ = ["GainSchedule", "ScheduledDesign", "ScheduledKKL"]
 
 
 class ScheduledKKL(CompiledPath, Estimator):
-    """The gain-scheduled KKL observer (numpy inference).
+    """The gain-scheduled KKL observer (numpy inference; its step runs compiled where
+    :func:`observer.jit.enabled`, :class:`~observer.kkl.scheduled_compiled.CompiledPath`).
 
     Args:
         system: what it computes with (f for Omega, h for missing samples, Te).
