@@ -330,3 +330,31 @@ def test_demo_checks_every_estimator_and_its_video_before_it_writes(tmp_path):
     r = run_cli("demo", "--scene", str(tmp_path / "missing.xml"), "--out", str(out))
     assert_user_error(r, "missing.xml")
     assert list(tmp_path.iterdir()) == []
+
+
+def test_an_error_the_interrupt_caused_ends_the_command_as_interrupted(monkeypatch, capsys,
+                                                                    tmp_path):
+    """A Ctrl-C inside a C extension's import (matplotlib's, as a run drew its plots)
+    comes out as ImportError: it ends the command with 130 and one line, as the
+    interrupt does, not with a traceback."""
+    from ledsim import cli
+    from ledsim.cli import commands
+    from ledsim.files.outputs import INTERRUPTED
+
+    def run(args):
+        INTERRUPTED.set()
+        try:
+            raise KeyboardInterrupt
+        except KeyboardInterrupt as e:
+            raise ImportError("initialization failed") from e
+
+    monkeypatch.setattr(commands, "run", run)
+    assert cli.main(["run", "--seeds", "1", "--out", str(tmp_path)]) == 130
+    assert capsys.readouterr().err.strip() == "ledsim: interrupted"
+
+    def broken(args):  # without the interrupt, an error stays an error
+        raise ImportError("initialization failed")
+
+    monkeypatch.setattr(commands, "run", broken)
+    with pytest.raises(ImportError):
+        cli.main(["run", "--seeds", "1", "--out", str(tmp_path)])

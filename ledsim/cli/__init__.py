@@ -168,9 +168,14 @@ def main(argv: list[str] | None = None) -> int:
                 raise KeyboardInterrupt
             _State.code, _State.phase = code, "done"
         except KeyboardInterrupt:
-            INTERRUPTED.set()
-            print("ledsim: interrupted", file=sys.stderr)
-            _State.code, _State.phase = EXIT_INTERRUPTED, "done"
+            _interrupted()
+        except Exception:
+            # An error the Ctrl-C caused: a KeyboardInterrupt raised while a C extension
+            # initialises comes out as "ImportError: initialization failed" (matplotlib's
+            # _image, as the plots were drawn). The work unwound as for the interrupt.
+            if not INTERRUPTED.is_set():
+                raise
+            _interrupted()
         return _State.code
     finally:  # main() may be called in-process (tests, notebooks): leave no trace
         if not _State.console:
@@ -178,6 +183,15 @@ def main(argv: list[str] | None = None) -> int:
             _State.phase = "setup"
         sys.unraisablehook = _State.unraisablehook
         INTERRUPTED.clear()
+
+
+def _interrupted() -> None:
+    """Ctrl-C ended the command (its temporaries removed as it unwound): say so, exit 130."""
+    from ledsim.files.outputs import INTERRUPTED
+
+    INTERRUPTED.set()
+    print("ledsim: interrupted", file=sys.stderr)
+    _State.code, _State.phase = EXIT_INTERRUPTED, "done"
 
 
 def _main(argv: list[str]) -> int:
