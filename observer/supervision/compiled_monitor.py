@@ -9,6 +9,7 @@ import math
 import numpy as np
 
 from observer.jit import njit
+from observer.supervision.compiled_pair import response_and_slope
 
 #: The reasons the kernel returns, by code (0: not lost; 3: no usable sample, the last
 #: decision stands).
@@ -21,13 +22,11 @@ def response_power(phi: float, gain: float, offsets: np.ndarray,
                    response: np.ndarray) -> np.ndarray:
     """h of a one-axis model whose photodiodes sit at ``offsets`` [rad]: gain x g(phi + o)
     with the two-Gaussian g of ``response`` (a1, b1, c1, a2, b2, c2)."""
-    a1, b1, c1, a2, b2, c2 = response[0], response[1], response[2], response[3], \
-        response[4], response[5]
     out = np.empty(offsets.size)
     for i in range(offsets.size):
-        p = phi + offsets[i]
-        u1, u2 = (p - b1) / c1, (p + b2) / c2
-        out[i] = gain * (a1 * math.exp(-(u1 * u1)) + a2 * math.exp(-(u2 * u2)))
+        g, _ = response_and_slope(phi + offsets[i], response[0], response[1], response[2],
+                                  response[3], response[4], response[5])
+        out[i] = gain * g
     return out
 
 
