@@ -45,18 +45,16 @@ import numpy as np
 
 from ledsim.agent.guidance import Mission, PathReference, led_in_start_frame
 from ledsim.agent.keeping import StationKeeper, StationKeeping
+from ledsim.agent.vehicle_frame import hull_frame, led_bearing
 from ledsim.agent.vehicle_row import VehicleRow, target_of
 from ledsim.constants import GRAVITY, NavigationNoise
-from ledsim.physics.batch import cross3
-from ledsim.physics.nav_sensors import GRAVITY_REACTION, NavigationReading, NavigationSensor
+from ledsim.physics.nav_sensors import NavigationReading, NavigationSensor
 from ledsim.physics.scene import transmitter_rise
 from ledsim.physics.world import LinkWorld
 from observer.navigation.ins import FIX_GATE, AidedINS, InertialNoise, InsState
 from observer.navigation.line_of_sight import LineOfSight, LineOfSightFilter
-from observer.rowops import columns, ops
 from observer.rows import Rows
 from observer.rows import matvec as _mv
-from observer.rows import transposed as _T
 
 __all__ = ["LineOfSight", "StationKeeping", "Vehicle", "inertial_noise"]
 
@@ -149,7 +147,7 @@ class Vehicle(Rows):
         x_dir = R0[:2, 0] / np.linalg.norm(R0[:2, 0])
         self.led = (hinge0 + ahead * x_dir + lateral * np.array([-x_dir[1], x_dir[0]]))[None]
         self._bearing0 = np.zeros(1)
-        self._bearing0 = self._led_bearing(self.ins.states)
+        self._bearing0 = led_bearing(self.ins.states, self.l_gimbal, self.led)
 
     @classmethod
     def stacked(cls, items):
@@ -255,14 +253,7 @@ class Vehicle(Rows):
         nav = ins.states
         if self.paths[0] is not None:
             self._follow(t, nav)
-        omega = r.gyro - nav.gyro_bias
-        # a: the mean acceleration over the step, hull frame [m/s^2]: the velocity
-        # increment less its bias and gravity's reaction.
-        att_T = _T(nav.attitude)
-        a = r.delta_velocity / self.Te - nav.accel_bias - att_T @ GRAVITY_REACTION
-        velocity = _mv(att_T, nav.velocity)
-        v_g = velocity + cross3(omega, self.l_gimbal)
-        nav_bearing = self._led_bearing(nav) - self._bearing0
+        omega, a, velocity, v_g, nav_bearing = hull_frame(r, nav, self)
         self.sight.update_rows(v_g, r.encoder, omega[:, 2], nav_bearing)
         if self.keeper is not None:
             self.keeper.act_rows(nav, ins.Ps, velocity, omega, a)
@@ -278,18 +269,3 @@ class Vehicle(Rows):
         hinge = nav.position[:, :2] + _mv(nav.attitude, self.l_gimbal)[:, :2]
         level = np.hypot(*(self.led - hinge).T)
         self.sight.ranges = np.maximum(np.hypot(level, self._rise), MIN_RANGE)
-
-    def _led_bearing(self, nav: InsState) -> np.ndarray:
-        """The LED's bearing from the gimbal's hinge in the hull's frame [rad] by the
-        navigated pose (the LED where the start put it), per vehicle."""
-        att, n = nav.attitude, self.n
-        o = ops(n)
-        r10, r00, px, py, lx, ly, ledx, ledy = columns(
-            n, att[:, 1, 0], att[:, 0, 0], nav.position[:, 0], nav.position[:, 1],
-            self.l_gimbal[:, 0], self.l_gimbal[:, 1], self.led[:, 0], self.led[:, 1])
-        heading = o.atan2(r10, r00)
-        c, s = o.cos(heading), o.sin(heading)
-        dx = ledx - (px + c * lx - s * ly)
-        dy = ledy - (py + s * lx + c * ly)
-        bearing = o.remainder(o.atan2(dy, dx) - heading, 2 * math.pi)
-        return np.array([bearing]) if n == 1 else bearing

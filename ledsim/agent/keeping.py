@@ -19,10 +19,13 @@ import numpy as np
 from ledsim.constants import ConfigError, NavigationNoise
 from ledsim.errors import check_ranges
 from ledsim.physics.world import LinkWorld
+from observer import jit
 from observer.navigation.hull_loads import HullLoadObserver, soft_deadband
 from observer.navigation.ins import InsState
 from observer.rowops import columns, ops
 from observer.rows import Rows
+
+compiled_keeping = jit.lazy("ledsim.agent.compiled_keeping")
 
 
 @dataclass(frozen=True)
@@ -145,12 +148,21 @@ class StationKeeper(Rows):
         navigated pose ``nav``, its covariance ``P`` (the INS's, 15x15), the hull-frame
         ``velocity`` [m/s], the bias-corrected gyro ``omega`` [rad/s] and the hull-frame
         acceleration ``a`` [m/s^2]; returns the thrust applied [N, N m], (N, 5)."""
-        alpha = (omega - self._omega) / self.Te
-        if not self.k.all():  # a first step has no earlier rate
-            alpha = np.where(self.k[:, None] > 0, alpha, 0.0)
-        measured = self._mass * np.concatenate([a, alpha[:, 1:]], axis=1) - self.thrust
-        load = self.loads.update_rows(measured)
-        command = self._pd(nav, P, velocity, omega) - load
+        if jit.enabled():
+            load = self.loads.update_rows(compiled_keeping.measured(
+                omega, self._omega, self.k, a, self._mass, self.thrust, self.Te))
+            g = self.gains
+            command = compiled_keeping.pd(
+                nav.attitude, nav.position, P, velocity, omega, self.home_position,
+                self.home_heading, self.surface, self.home_velocity, self._kp, self._kd,
+                float(g.deadband), float(g.velocity_deadband)) - load
+        else:
+            alpha = (omega - self._omega) / self.Te
+            if not self.k.all():  # a first step has no earlier rate
+                alpha = np.where(self.k[:, None] > 0, alpha, 0.0)
+            measured = self._mass * np.concatenate([a, alpha[:, 1:]], axis=1) - self.thrust
+            load = self.loads.update_rows(measured)
+            command = self._pd(nav, P, velocity, omega) - load
         self.thrust = np.array([w.set_thrust(c) for w, c in zip(self.worlds, command,
                                                                 strict=True)])
         self._omega = omega

@@ -35,89 +35,22 @@ from __future__ import annotations
 
 import math
 from collections import deque
-from dataclasses import dataclass, fields
 
 import numpy as np
 
 from ledsim.constants import GRAVITY, NavigationNoise
+from ledsim.physics.nav_reading import NavigationReading, SensorBiases
 from ledsim.physics.world import LinkWorld, WorldError
+from observer import jit
 from observer.navigation.rotations import rotation_log
 from observer.rows import Rows
+
+compiled_nav = jit.lazy("ledsim.physics.compiled_nav")
 
 #: Added to the run's seed for the navigation sensors' own generator.
 SEED_OFFSET = 20_000
 #: What an accelerometer at rest reads: gravity's reaction, world frame [m/s^2].
 GRAVITY_REACTION = np.array([0.0, 0.0, GRAVITY])
-
-
-@dataclass
-class NavigationReading:
-    """One control step of the vehicle's sensors, with their noise (see the module
-    docstring): gyro (3,) [rad/s] and accel (3,) [m/s^2] in the IMU frame, dvl (3,)
-    [m/s] in the DVL frame, encoder [rad], position_fix (3,) [m] in the world frame or
-    None when no fix arrived this step, depth [m] of the IMU below its start, positive
-    down (a pressure sensor), dvl_fresh: the DVL pinged this step, dvl_gyro: the gyro's
-    reading at the DVL's last ping (to take the lever arm off that ping's velocity),
-    delta_angle (3,) [rad]: the IMU's orientation increment since the last step, in its
-    frame; delta_velocity (3,) [m/s]: the specific force integrated since the last
-    step, in its current frame (a strike's velocity change included, which a sampled
-    accelerometer misses); dvl_valid: the DVL has bottom lock (else ``dvl`` is the last
-    ping, stale); magnetometer (3,) [T] in the IMU frame, or None when none arrived this
-    step; fix_time [s]: when the fix that arrived was measured; fix_std [m]: the fix's
-    expected error, each axis, as the USBL reports it (its outliers not included)."""
-
-    gyro: np.ndarray
-    accel: np.ndarray
-    dvl: np.ndarray
-    encoder: float
-    position_fix: np.ndarray | None
-    depth: float = 0.0
-    dvl_fresh: bool = True
-    dvl_gyro: np.ndarray | None = None
-    delta_angle: np.ndarray | None = None
-    delta_velocity: np.ndarray | None = None
-    dvl_valid: bool = True
-    magnetometer: np.ndarray | None = None
-    fix_time: float | None = None
-    fix_std: float | None = None
-
-    @classmethod
-    def stacked(cls, readings) -> NavigationReading:
-        """The readings of several sets of vehicles (each taken for its rows), as one
-        taken for all their rows (a field none has stays None; one some lack, NaN)."""
-        out = {}
-        for f in fields(cls):
-            values = [getattr(r, f.name) for r in readings]
-            present = [v for v in values if v is not None]
-            if not present:
-                out[f.name] = None
-                continue
-            blank = np.full_like(np.asarray(present[0], dtype=float), np.nan)
-            out[f.name] = np.concatenate([blank if v is None else np.asarray(v)
-                                          for v in values])
-        return cls(**out)
-
-    def row(self, i: int) -> NavigationReading:
-        """Vehicle ``i``'s reading of one taken for N vehicles (NaN fixes as None)."""
-        fixed = not math.isnan(self.fix_time[i])
-        mag = self.magnetometer
-        return NavigationReading(
-            self.gyro[i], self.accel[i], self.dvl[i], float(self.encoder[i]),
-            self.position_fix[i] if fixed else None, float(self.depth[i]),
-            bool(self.dvl_fresh[i]), self.dvl_gyro[i], self.delta_angle[i],
-            self.delta_velocity[i], bool(self.dvl_valid[i]),
-            None if mag is None or math.isnan(mag[i, 0]) else mag[i],
-            float(self.fix_time[i]) if fixed else None,
-            float(self.fix_std[i]) if fixed else None)
-
-
-@dataclass(frozen=True)
-class SensorBiases:
-    """The IMU's biases in a reading: gyro (3,) [rad/s] and accelerometer (3,)
-    [m/s^2] (the truth a navigation filter's estimate is measured against)."""
-
-    gyro: np.ndarray
-    accel: np.ndarray
 
 
 class NavigationSensor(Rows):
@@ -170,6 +103,7 @@ class NavigationSensor(Rows):
                        np.array([[1.0], [root_te], [root_te], [1.0],
                                  [math.sqrt(1 - decay[0]**2)],
                                  [math.sqrt(1 - decay[1]**2)]]))
+        self._scale_rows = np.ascontiguousarray(np.concatenate(self._scale, axis=1).T)
         self.k = np.zeros(1, dtype=np.int64)
         self._dvl, self._has_dvl = np.zeros((1, 3)), np.zeros(1, dtype=bool)
         self._dvl_gyro = np.zeros((1, 3))
@@ -222,25 +156,32 @@ class NavigationSensor(Rows):
         draws = [rng.standard_normal(18 + 3 * f + 3 * x + 1 + 3 * m) for rng, f, x, m in
                  zip(self.rngs, fresh.tolist(), fix_due.tolist(), mag_due.tolist(),
                      strict=True)]
-        # The six white draws times their figures, as each line below once scaled its
-        # own: gyro, delta angle, delta velocity, accelerometer, the two bias drifts.
-        noise = (np.array([d[:18] for d in draws]).reshape(N, 6, 3) * self._scale[0]) \
-            * self._scale[1]
-        true = np.array([(t.gyro, t.accel) for t in truths])
-        gyro = true[:, 0] + self.gyro_bias + noise[:, 0]
         attitude = np.array([w.hull_rotation for w in self.worlds])
-        delta = rotation_log(self._attitude.swapaxes(1, 2) @ attitude) \
-            + Te * self.gyro_bias + noise[:, 1]
-        self._attitude = attitude
         velocity = np.array([w.hull_velocity()[3:] for w in self.worlds])
-        dv = (attitude.swapaxes(1, 2) @ (velocity - self._velocity + Te * GRAVITY_REACTION)
-              [..., None])[..., 0] + Te * self.accel_bias + noise[:, 2]
-        self._velocity = velocity
-        accel = true[:, 1] + self.accel_bias + noise[:, 3]
+        true = np.array([(t.gyro, t.accel) for t in truths])
         self._biases = SensorBiases(self.gyro_bias, self.accel_bias)  # replaced below
-        # Gauss-Markov biases of stationary spread the bias instability.
-        self.gyro_bias = self._decay[0] * self.gyro_bias + noise[:, 4]
-        self.accel_bias = self._decay[1] * self.accel_bias + noise[:, 5]
+        if jit.enabled():
+            gyro, delta, dv, accel, self.gyro_bias, self.accel_bias = compiled_nav.imu(
+                true[:, 0], true[:, 1], attitude, self._attitude, velocity, self._velocity,
+                np.array([d[:18] for d in draws]), self._scale_rows, self.gyro_bias,
+                self.accel_bias, self._decay[0], self._decay[1], Te, GRAVITY_REACTION)
+        else:
+            # The six white draws times their figures, as each line below once scaled
+            # its own: gyro, delta angle, delta velocity, accelerometer, the two bias
+            # drifts.
+            noise = (np.array([d[:18] for d in draws]).reshape(N, 6, 3) * self._scale[0]) \
+                * self._scale[1]
+            gyro = true[:, 0] + self.gyro_bias + noise[:, 0]
+            delta = rotation_log(self._attitude.swapaxes(1, 2) @ attitude) \
+                + Te * self.gyro_bias + noise[:, 1]
+            dv = (attitude.swapaxes(1, 2) @ (velocity - self._velocity
+                                             + Te * GRAVITY_REACTION)[..., None])[..., 0] \
+                + Te * self.accel_bias + noise[:, 2]
+            accel = true[:, 1] + self.accel_bias + noise[:, 3]
+            # Gauss-Markov biases of stationary spread the bias instability.
+            self.gyro_bias = self._decay[0] * self.gyro_bias + noise[:, 4]
+            self.accel_bias = self._decay[1] * self.accel_bias + noise[:, 5]
+        self._attitude, self._velocity = attitude, velocity
         fix, fix_time, fix_std = np.empty((N, 3)), np.empty(N), np.empty(N)
         for a in (fix, fix_time, fix_std):
             a.fill(np.nan)

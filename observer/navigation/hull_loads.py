@@ -14,7 +14,11 @@ from __future__ import annotations
 
 import numpy as np
 
+from observer import jit
 from observer.rows import Rows
+
+compiled_loads = jit.lazy("observer.navigation.compiled_loads")
+_NO_LIMIT = np.full(5, np.inf)
 
 
 def soft_deadband(square, variance, k: float):
@@ -124,6 +128,13 @@ class HullLoadObserver(Rows):
 
     def update_rows(self, measured: np.ndarray) -> np.ndarray:
         """:meth:`update` of every hull, (N, 5)."""
+        if jit.enabled():
+            limit = _NO_LIMIT if self.limit is None else self.limit
+            self._load, self._slow_load, out = compiled_loads.update(
+                self._load, self._slow_load, np.ascontiguousarray(measured, dtype=float),
+                limit, self.k_fast, self.k_slow, self._slow_variance,
+                self._gust_variance, float(self.deadband))
+            return out
         self._load = self._load + self.k_fast * (measured - self._load)
         if self.limit is not None:
             # np.clip's own bits, without its per-call cost on a few numbers.

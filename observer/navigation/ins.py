@@ -45,12 +45,15 @@ from collections import deque
 
 import numpy as np
 
+from observer import jit
 from observer.navigation.ins_aiding import BA, BG, FIX_GATE, N_ERROR, TH, InsAiding, P, V
 from observer.navigation.ins_state import InertialNoise, InsState
 from observer.navigation.rotations import rotation_exp, rotation_log, skew
 from observer.rows import Rows
 from observer.rows import matvec as _mv
 from observer.rows import transposed as _T
+
+compiled_ins = jit.lazy("observer.navigation.compiled_ins")
 
 
 class AidedINS(InsAiding, Rows):
@@ -188,6 +191,16 @@ class AidedINS(InsAiding, Rows):
     def propagate_rows(self, delta_angle: np.ndarray, delta_velocity: np.ndarray) -> None:
         """:meth:`propagate` of every vehicle, (N, 3) each."""
         s, Te = self.states, self.Te
+        if jit.enabled():
+            s.position, s.velocity, s.attitude, self.Ps, self.displacements = \
+                compiled_ins.propagate(s.position, s.velocity, s.attitude, s.gyro_bias,
+                                       s.accel_bias, self.Ps, self._F, self.Q,
+                                       np.ascontiguousarray(delta_angle, dtype=float),
+                                       np.ascontiguousarray(delta_velocity, dtype=float),
+                                       Te, self.gravity, self.displacements)
+            for h, d in zip(self._histories, self.displacements, strict=True):
+                h.append(d)
+            return
         dth = delta_angle - s.gyro_bias * Te
         dv = delta_velocity - s.accel_bias * Te
         turn = rotation_exp(dth)

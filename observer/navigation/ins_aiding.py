@@ -8,6 +8,7 @@ from __future__ import annotations
 
 import numpy as np
 
+from observer import jit
 from observer.navigation.rotations import libm_square, rotation_exp, skew
 from observer.rows import matvec as _mv
 from observer.rows import transposed as _T
@@ -17,6 +18,8 @@ P, V, TH, BG, BA = (slice(0, 3), slice(3, 6), slice(6, 9), slice(9, 12), slice(1
 N_ERROR = 15
 #: chi-square(3) at 1 - 1e-4: a fix whose normalised innovation exceeds it is an outlier.
 FIX_GATE = 21.11
+
+compiled_ins = jit.lazy("observer.navigation.compiled_ins")
 
 
 class InsAiding:
@@ -82,6 +85,14 @@ class InsAiding:
         """A depth reading [m] (positive down) of every vehicle, (N,), below the height
         ``surface`` [m] where depth is 0."""
         s = self.states
+        if jit.enabled():
+            s.position, s.velocity, s.attitude, s.gyro_bias, s.accel_bias = \
+                compiled_ins.depth_update(
+                    s.position, s.velocity, s.attitude, s.gyro_bias, s.accel_bias, self.Ps,
+                    np.ascontiguousarray(depth, dtype=float),
+                    np.ascontiguousarray(np.broadcast_to(surface, depth.shape), dtype=float),
+                    self.noise.depth_noise**2)
+            return
         r = depth - (surface - s.position[:, 2])
         ph = self.Ps[:, :, 2].copy()  # P H^T with H = -e_z, sign apart
         S = ph[:, 2] + self.noise.depth_noise**2

@@ -24,8 +24,11 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from observer import jit
 from observer.rowops import columns, ops
 from observer.rows import Rows
+
+compiled_sight = jit.lazy("observer.navigation.compiled_sight")
 
 
 @dataclass
@@ -90,6 +93,8 @@ class LineOfSightFilter(Rows):
         #: Each vehicle's range to the LED [m]: the told distance, or where a moving
         #: vehicle's navigation puts it (set by its owner each step).
         self.ranges = np.array([float(distance)])
+        self._constants = np.array([self.k_rate, self.k_power, Te, reanchor_rate,
+                                    reanchor_time, self.k_reanchor, self.k_bearing], float)
 
     def los_of(self, i: int) -> LineOfSight:
         """Vehicle ``i``'s line of sight at its last step."""
@@ -117,6 +122,13 @@ class LineOfSightFilter(Rows):
         state = (self._raw, self._power, self.rate, self.bearing, self._anchor)
         # the rate's noise goes as 1 / range: its power at each vehicle's range now
         noise = self._noise_power * np.square(self.distance / self.ranges)
+        if jit.enabled():
+            new = compiled_sight.step(*state, self.k, v_gimbal, encoder, hull_rate,
+                                      nav_bearing, noise, self.ranges, self._constants)
+            self._raw, self._power, self.rate, self.bearing, self._anchor, \
+                self.acceleration, self.hull_rate = new
+            self.k = self.k + 1
+            return
         new = _step(ops(n), self, *columns(n, *state, self.k > 0, v_gimbal[:, 0],
                                            v_gimbal[:, 1], encoder, hull_rate, nav_bearing,
                                            noise, self.ranges))

@@ -1,0 +1,29 @@
+"""Scalar helpers the compiled kernels share (numba lacks ``math.remainder``)."""
+
+from __future__ import annotations
+
+import numpy as np
+
+from observer.jit import njit
+
+
+@njit()
+def remainder(x: float, y: float) -> float:
+    """``math.remainder(x, y)`` for y > 0: x less the nearest multiple of y, in
+    [-y/2, y/2]. fmod is exact, and so is the one subtraction of y (Sterbenz); only a
+    tie, exactly y/2 off, may round the other way."""
+    r = np.fmod(x, y)
+    if r > 0.5 * y:
+        return r - y
+    if r < -0.5 * y:
+        return r + y
+    return r
+
+
+@njit()
+def soft_deadband(square: float, variance: float, k: float) -> float:
+    """``observer.navigation.hull_loads.soft_deadband`` of one quantity."""
+    if k == 0.0:
+        return 1.0
+    ratio = k * k * variance / max(square, 1e-300)
+    return 0.0 if ratio >= 1.0 else 1.0 - ratio * ratio
