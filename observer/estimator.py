@@ -186,16 +186,22 @@ class GaussianFilter(ToldNoise, Estimator):
         """Start again from the domain's centre when the mean ran away: a prediction
         without updates (a gated sample, a lost link) through a nonlinear f can square
         a bad estimate step after step (1e2, 1e4, 1e8, ...) until it overflows."""
-        box = getattr(self, "_contained_box", None)
-        if box is None:  # plain floats: numpy's per-call cost was 5 % of an EKF step
-            s, k = self.system, self.CONTAINED_WIDTHS
-            box = self._contained_box = [
-                (0.5 * (lo + hi) - k * 0.5 * (hi - lo), 0.5 * (lo + hi) + k * 0.5 * (hi - lo))
-                for lo, hi in zip(s.domain_low.tolist(), s.domain_high.tolist(), strict=True)]
+        box = self.contain_box()
         # NaN fails every comparison, and a non-finite P makes its sum non-finite
         if not (all(lo <= v <= hi for v, (lo, hi) in zip(self.x.tolist(), box, strict=True))
                 and math.isfinite(float(self.P.sum()))):
             self.reset()
+
+    def contain_box(self) -> list[tuple[float, float]]:
+        """Each state's (low, high) bounds the mean may not leave (:meth:`contain`), in
+        plain floats: numpy's per-call cost was 5 % of an EKF step."""
+        box = getattr(self, "_contained_box", None)
+        if box is None:
+            s, k = self.system, self.CONTAINED_WIDTHS
+            box = self._contained_box = [
+                (0.5 * (lo + hi) - k * 0.5 * (hi - lo), 0.5 * (lo + hi) + k * 0.5 * (hi - lo))
+                for lo, hi in zip(s.domain_low.tolist(), s.domain_high.tolist(), strict=True)]
+        return box
 
     def diverged(self, innov: np.ndarray, S: np.ndarray) -> bool:
         """Count an implausible innovation; True (and a fresh start) once too many

@@ -218,6 +218,11 @@ class IdentifiedGimbalModel(DiscreteSystem):
         return (self.power_gain, np.asarray(self._offsets, dtype=float),
                 np.array([r.a1, r.b1, r.c1, r.a2, r.b2, r.c2], dtype=float))
 
+    def compiled_f(self) -> tuple:
+        """f as the compiled kernels take it (:mod:`observer.baselines.compiled_ekf`): the
+        coefficients (a1, a2, a3) and (b1, b2, b3) of the class docstring."""
+        return self.coef_phi.copy(), self.coef_rate.copy()
+
     def step_form(self):
         """f and h for an exported observer (:class:`observer.kkl.export.StepForm`)."""
         return step_form(self.coef_phi, self.coef_rate, self.power_gain, self.constants,
