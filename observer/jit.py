@@ -60,8 +60,10 @@ def use(compiled: bool):
 
 
 def njit(*args, **kwargs):
-    """``numba.njit(cache=True, error_model="numpy", ...)``; without numba, the function
-    itself (the kernel is then only reachable through a path that checks
+    """``numba.njit(cache=True, error_model="numpy", ...)`` (without the cache where
+    numba finds nowhere to write it: a read-only install with no writable home and no
+    ``NUMBA_CACHE_DIR``; each process then compiles what it runs); without numba, the
+    function itself (the kernel is then only reachable through a path that checks
     :func:`enabled`, never called)."""
     kwargs.setdefault("cache", True)
     # numpy's error model: a division by zero gives inf or NaN, as in numpy, and the
@@ -71,7 +73,16 @@ def njit(*args, **kwargs):
         return args[0] if args and callable(args[0]) else (lambda f: f)
     import numba
 
-    return numba.njit(*args, **kwargs)
+    def decorate(f):
+        try:
+            return numba.njit(**kwargs)(f)
+        except RuntimeError as exc:  # nowhere to write the cache (numba's locators)
+            if not kwargs.get("cache") or "no locator available" not in str(exc):
+                raise
+            kwargs["cache"] = False  # compile in each process instead
+            return numba.njit(**kwargs)(f)
+
+    return decorate(args[0]) if args and callable(args[0]) else decorate
 
 
 class lazy:  # noqa: N801 (used as a module)

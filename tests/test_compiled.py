@@ -230,3 +230,26 @@ def test_the_warm_up_says_when_the_compiled_path_is_off():
     p = subprocess.run([sys.executable, "-m", "ledsim.loop.warm"], capture_output=True,
                        text=True, env=env, timeout=120)
     assert p.returncode == 0 and "the compiled path is off" in p.stdout, p.stderr
+
+
+def test_a_kernel_compiles_without_its_cache_where_numba_has_nowhere_to_write_it(monkeypatch):
+    """A read-only install with no writable home: numba finds no cache locator. The kernel
+    then compiles in the process (it once surfaced as a 'corrupt checkpoint')."""
+    import numba.core.caching as caching
+
+    monkeypatch.setattr(caching.CacheImpl, "_locator_classes", [])
+
+    def twice(x):
+        return 2.0 * x
+
+    kernel = jit.njit()(twice)
+    assert kernel(1.5) == 3.0
+    assert type(kernel._cache).__name__ == "NullCache"  # compiled, not cached
+
+    def thrice(x):
+        return 3.0 * x
+
+    with pytest.raises(RuntimeError, match="no locator"):  # what numba itself does
+        import numba
+
+        numba.njit(cache=True)(thrice)
