@@ -143,24 +143,33 @@ def compiled_against_reference(repeats: int = 5) -> dict:
     """The supervised KKL on the compiled path (:mod:`observer.jit`) and on the numpy
     reference, alternately in this process, medians of ``repeats``: the 64 seeds' steps
     / s (0.5 s of the align scenario) against ``mujoco.rollout`` and one seed's us per
-    step (10 s), one thread. The reference path is the code before the compiled one
-    (``scripts/fingerprint.py`` moves 0 runs with ``LEDSIM_COMPILED=0``)."""
+    step (10 s) with the KKL and with the EKF on the paper's bench, and with the CLI's
+    default head (the pan-tilt with its quad on ``luma``), one thread. The reference path
+    is the code before the compiled one (``scripts/fingerprint.py`` moves 0 runs with
+    ``LEDSIM_COMPILED=0``)."""
     from ledsim.loop.closed_loop import run_once
     from ledsim.loop.run_config import RunConfig
 
     rows = {True: [], False: []}
+    one = {"kkl": RunConfig(scenario="align", estimator="kkl"),
+           "ekf": RunConfig(scenario="align", estimator="ekf"),
+           "default_head": RunConfig(scenario="align", link="luma")}
     for _ in range(repeats):
         for compiled in (False, True):
             with jit.use(compiled):
                 b, r = batch_against_rollout(64, 0.5, 1, "kkl", True)
-                out = run_once(RunConfig(scenario="align", estimator="kkl"), seed=0)
-            rows[compiled].append((b, r, 1e4 / out.realtime_factor))
+                us = {k: 1e4 / run_once(cfg, seed=0).realtime_factor
+                      for k, cfg in one.items()}
+            rows[compiled].append((b, r, us))
     out = {}
     for compiled, runs in rows.items():
-        b, r, us = (float(np.median([run[i] for run in runs])) for i in range(3))
+        b, r = (float(np.median([run[i] for run in runs])) for i in range(2))
+        med = {k: float(np.median([run[2][k] for run in runs])) for k in one}
         out["compiled" if compiled else "reference"] = {
             "steps_per_s_64": b, "rollout_steps_per_s_64": r, "ratio_64": b / r,
-            "us_per_seed_step_64": 1e6 / b, "one_seed_us_per_step": us}
+            "us_per_seed_step_64": 1e6 / b, "one_seed_us_per_step": med["kkl"],
+            "one_seed_ekf_us_per_step": med["ekf"],
+            "default_head_us_per_step": med["default_head"]}
     return out
 
 
@@ -222,6 +231,26 @@ def short_run(plot: bool, seconds: float = 10.0, compiled: bool = True) -> dict:
     return {"seconds": seconds, "wall_s": wall, "simulating_s": sim,
             "simulating_share": sim / wall, "imports_torch": torch_imported,
             "compiled": compiled}
+
+
+def short_runs(repeats: int = 3) -> dict:
+    """:func:`short_run` of each row (plots on; 10 s and 60 s without plots on both
+    paths), the rows alternately, ``repeats`` times: each figure the median of its
+    runs (one fresh process is one sample of this machine's noise)."""
+    rows = {"plots": (True, 10.0, True), "no_plot": (False, 10.0, True),
+            "no_plot_reference": (False, 10.0, False), "no_plot_60s": (False, 60.0, True),
+            "no_plot_60s_reference": (False, 60.0, False)}
+    samples = {key: [] for key in rows}
+    for _ in range(repeats):
+        for key, (plot, seconds, compiled) in rows.items():
+            samples[key].append(short_run(plot, seconds, compiled))
+    out = {}
+    for key, runs in samples.items():
+        out[key] = dict(runs[0])
+        for f in ("wall_s", "simulating_s", "simulating_share"):
+            out[key][f] = float(np.median([r[f] for r in runs]))
+        out[key]["repeats"] = repeats
+    return out
 
 
 def onnx_step_speed(steps: int = 2000) -> dict:
@@ -406,7 +435,14 @@ def main() -> None:
                      f"| {1e6 / bare_sps / r['one_seed_us_per_step']:.2f} |")
     lines += ["", "Speed-up of the compiled path: "
               f"{ref['us_per_seed_step_64'] / c['us_per_seed_step_64']:.2f}x on 64 seeds, "
-              f"{ref['one_seed_us_per_step'] / c['one_seed_us_per_step']:.2f}x on one seed."]
+              f"{ref['one_seed_us_per_step'] / c['one_seed_us_per_step']:.2f}x on one seed.",
+              "", "One seed's step (us) with the EKF on the same bench, and with the "
+              "CLI's default head (`ledsim run`'s: the pan-tilt with its quad on `luma`, "
+              "whose per-axis KKLs and head supervisor are not compiled yet; its vehicle "
+              "is):", "", "| path | EKF, paper's bench | default head |", "|---|---|---|"]
+    for name, r in (("numpy reference", ref), ("compiled", c)):
+        lines.append(f"| {name} | {r['one_seed_ekf_us_per_step']:.0f} "
+                     f"| {r['default_head_us_per_step']:.0f} |")
     lines += ["", "## Closed loop in MuJoCo (align scenario, 10 s, one core)", "",
               "| estimator | real-time factor of the loop | over the physics floor "
               "| us per step | estimator us / step |", "|---|---|---|---|---|"]
@@ -425,12 +461,11 @@ def main() -> None:
               "| how | us per transition | speed-up |", "|---|---|---|"]
     for label, us in trans.items():
         lines.append(f"| {label} | {us:.1f} | {ref / us:.2f}x |")
-    runs = {"plots": short_run(True), "no_plot": short_run(False),
-            "no_plot_reference": short_run(False, compiled=False),
-            "no_plot_60s": short_run(False, 60.0),
-            "no_plot_60s_reference": short_run(False, 60.0, compiled=False)}
+    runs = short_runs()
     floor_import = import_floor()
-    lines += ["", "## A short `ledsim run` (one seed, align scenario, fresh process)", "",
+    lines += ["", "## A short `ledsim run` (one seed, align scenario, the default head, "
+              "fresh process)", "", "The rows run alternately, each figure the median of "
+              f"{runs['plots']['repeats']} runs.", "",
               "| simulated [s] | plots | path | wall time [s] | simulating [s] "
               "| share simulating | imports torch |", "|---|---|---|---|---|---|---|"]
     for key, r in runs.items():
@@ -445,7 +480,14 @@ def main() -> None:
               "plots, importing matplotlib and drawing. The shipped observers load "
               "without torch (`.safetensors` files). A fresh Python that only imports "
               f"numpy and MuJoCo takes {floor_import:.2f} s: longer than the 10 s run "
-              "simulates, so only longer runs can spend most of their time simulating."]
+              "simulates, so only longer runs can spend most of their time simulating. "
+              "On the compiled path a process pays once for numba's import and its "
+              "first cached kernel's load (about half a second), which a run earns back "
+              "by simulating faster: the 10 s run's wall time is "
+              f"{runs['no_plot']['wall_s']:.2f} s against "
+              f"{runs['no_plot_reference']['wall_s']:.2f} s on the reference, the 60 s "
+              f"run's {runs['no_plot_60s']['wall_s']:.2f} s against "
+              f"{runs['no_plot_60s_reference']['wall_s']:.2f} s."]
     ox = onnx_step_speed()
     lines += ["", "## The exported observer (`ledsim export`, one step, one thread)", "",
               "The shipped MuJoCo KKL as an ONNX graph (float64) under onnxruntime, against "
