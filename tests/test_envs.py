@@ -158,3 +158,20 @@ def test_the_estimator_wrapper_passes_gymnasiums_checker():
         check_env(env, skip_render_check=True)
     assert not [w for w in caught if "infinity" in str(w.message)]
     env.close()
+
+
+def test_making_v0_and_v1_says_nothing_of_an_out_of_date_version():
+    """The three ids are different tasks: Gymnasium's "out of date" warning for v0 and v1
+    (it reads them as v2's releases) is silenced, with every other warning kept."""
+    import subprocess
+    import sys
+
+    code = ("import gymnasium as gym, ledsim.envs, warnings\n"
+            "for i in ('ledsim/LinkAlign-v0', 'ledsim/LinkAlign-v1'):\n"
+            "    gym.make(i).close()\n"
+            "warnings.warn('kept', DeprecationWarning)\n")
+    r = subprocess.run([sys.executable, "-W", "default", "-c", code], capture_output=True,
+                       text=True, check=True, env={**__import__("os").environ,
+                                                   "MUJOCO_GL": "osmesa"})
+    assert "out of date" not in r.stderr, r.stderr
+    assert "kept" in r.stderr

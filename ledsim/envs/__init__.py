@@ -19,8 +19,12 @@ id                          what it is
 autoreset); ``vectorization_mode="sync"`` or ``"async"`` still gives Gymnasium's own.
 
 A new version for the new default, as Gymnasium's convention asks when results change:
-``LinkAlign-v0`` keeps its behaviour.
+``LinkAlign-v0`` keeps its behaviour. The three are different tasks (another link,
+another receiver and action space), not one task's releases, so Gymnasium's warning that
+v0 and v1 are "out of date" on every ``gym.make`` is silenced here (that message only).
 """
+
+import warnings
 
 from gymnasium.envs.registration import register, registry
 
@@ -44,6 +48,9 @@ ENV_ID_HEAD = "ledsim/LinkAlign-v2"
 if ENV_ID_HEAD not in registry:
     register(id=ENV_ID_HEAD, entry_point="ledsim.envs.head_align:HeadAlignEnv",
              max_episode_steps=1000)
+
+warnings.filterwarnings("ignore", message=r".*ledsim/LinkAlign-v[01] is out of date",
+                        category=DeprecationWarning)
 
 __all__ = ["ENV_ID", "ENV_ID_HEAD", "ENV_ID_PHYSICAL", "LinkAlignEnv", "EstimatorObservation",
            "ShippedAlignmentPolicy"]
