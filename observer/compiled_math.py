@@ -27,3 +27,19 @@ def soft_deadband(square: float, variance: float, k: float) -> float:
         return 1.0
     ratio = k * k * variance / max(square, 1e-300)
     return 0.0 if ratio >= 1.0 else 1.0 - ratio * ratio
+
+
+@njit()
+def matmul(A: np.ndarray, B: np.ndarray, b_transposed: bool = False) -> np.ndarray:
+    """A @ B (A @ B^T with ``b_transposed``) of two small matrices, summed in loop
+    order."""
+    n, q = A.shape[0], A.shape[1]
+    m = B.shape[0] if b_transposed else B.shape[1]
+    out = np.zeros((n, m))
+    for i in range(n):
+        for j in range(m):
+            s = 0.0
+            for t in range(q):
+                s += A[i, t] * (B[j, t] if b_transposed else B[t, j])
+            out[i, j] = s
+    return out

@@ -84,6 +84,29 @@ def traces():
     return out
 
 
+def compiled_differences(cfg, series, monkeypatch, check=None) -> np.ndarray:
+    """A fresh estimator of ``cfg`` given a run's recorded calls ``series``: asserts that
+    the reference path replays them bit for bit, and returns the compiled path's
+    difference at every replayed call (``check``: called with the compiled estimator
+    before the replay)."""
+    import observer.recording as recording
+    from ledsim.loop.replay import run_estimator
+
+    with jit.use(False):
+        assert recording.replay_calls(run_estimator(cfg), series) == 0.0
+    diffs = []
+    exact = recording.difference
+    monkeypatch.setattr(recording, "difference",
+                        lambda x, out, d=diffs, f=exact: d.append(f(x, out)) or d[-1])
+    with jit.use(True):
+        est = run_estimator(cfg)
+        if check is not None:
+            check(est)
+        recording.replay_calls(est, series)
+    monkeypatch.setattr(recording, "difference", exact)
+    return np.array(diffs)
+
+
 def test_the_compiled_kkl_gives_the_references_estimates_over_every_disturbance(
         traces, monkeypatch):
     """A fresh KKL given a run's calls: on the reference path bit for bit, on the
@@ -92,20 +115,8 @@ def test_the_compiled_kkl_gives_the_references_estimates_over_every_disturbance(
     or after a kick (off by radians), through the decoder's steepest region, where
     1e-16 of z becomes 1e-7 of phi. The differences do not grow: z is a stable
     filter."""
-    import observer.recording as recording
-    from ledsim.loop.replay import run_estimator
-
     for cfg, series in traces:
-        with jit.use(False):
-            assert recording.replay_calls(run_estimator(cfg), series) == 0.0
-        diffs = []
-        exact = recording.difference
-        monkeypatch.setattr(recording, "difference",
-                            lambda x, out, d=diffs, f=exact: d.append(f(x, out)) or d[-1])
-        with jit.use(True):
-            recording.replay_calls(run_estimator(cfg), series)
-        monkeypatch.setattr(recording, "difference", exact)
-        d = np.array(diffs)
+        d = compiled_differences(cfg, series, monkeypatch)
         assert d.max() <= 1e-5, (cfg.disturbances, d.max())
         assert np.median(d) <= 1e-12, (cfg.disturbances, np.median(d))
 

@@ -8,6 +8,7 @@ import numpy as np
 import pytest
 
 from observer import jit
+from tests.test_compiled import compiled_differences
 
 pytestmark = pytest.mark.skipif(not jit.installed(), reason="numba is not installed")
 
@@ -21,24 +22,17 @@ def test_the_compiled_ekf_gives_the_references_estimates(kinds, monkeypatch):
     """A fresh EKF given a run's calls: on the reference path bit for bit, on the
     compiled path within round-off at every update (measured: 7e-15 at most, a median
     of 2e-17)."""
-    import observer.recording as recording
     from ledsim.loop.closed_loop import run_once
-    from ledsim.loop.replay import run_estimator
     from ledsim.loop.run_config import RunConfig
 
     cfg = RunConfig(seconds=2.0, disturbances=kinds, estimator="ekf")
     with jit.use(False):
         series = run_once(cfg, 1, keep_trace=True).trace.series()
-        assert recording.replay_calls(run_estimator(cfg), series) == 0.0
-    diffs = []
-    exact = recording.difference
-    monkeypatch.setattr(recording, "difference",
-                        lambda x, out, d=diffs, f=exact: d.append(f(x, out)) or d[-1])
-    with jit.use(True):
-        est = run_estimator(cfg)
-        assert est._compiled_numbers() is not None  # the compiled path runs
-        recording.replay_calls(est, series)
-    d = np.array(diffs)
+
+    def runs_compiled(est):
+        assert est._compiled_numbers() is not None
+
+    d = compiled_differences(cfg, series, monkeypatch, runs_compiled)
     assert d.size > 100
     assert d.max() <= 1e-12, d.max()
     assert np.median(d) <= 1e-15, np.median(d)

@@ -10,17 +10,16 @@ import math
 import numpy as np
 import pytest
 
-from ledsim.agent.autopilot import Vehicle, inertial_noise
+from ledsim.agent.autopilot import inertial_noise
 from ledsim.agent.keeping import StationKeeping
 from ledsim.constants import NavigationNoise
-from ledsim.physics.disturbances import parse_disturbance
-from ledsim.physics.tick import advance, prepare
-from ledsim.physics.world import LinkWorld
+from ledsim.physics.tick import advance
 from observer import jit
 from observer.navigation.hull_loads import HullLoadObserver
 from observer.navigation.ins import AidedINS
 from observer.navigation.ins_state import InsState
 from observer.navigation.rotations import rotation_exp
+from tests.test_vehicle_rows import _start
 
 pytestmark = pytest.mark.skipif(not jit.installed(), reason="numba is not installed")
 
@@ -96,15 +95,7 @@ CASES = [(0, ("current:speed=0.1,heading=1.2,gust=0.05",), 0.0),
 
 
 def _vehicle_run(seed, disturbances, gimbal, steps=250):
-    w = LinkWorld()
-    w.reset(gimbal_angle=gimbal)
-    ds = [parse_disturbance(d) for d in disturbances]
-    for d in ds:
-        d.reset(seed)
-    w.forward_kinematics()
-    noise = NavigationNoise(fix_outlier_share=0.3, fix_range_error=0.01, fix_latency=0.7)
-    v = Vehicle(w, TE, seed, 0.085, station_keeping=True, noise=noise)
-    prepare(w, ds, 0.0, v)
+    w, ds, v = _start(seed, disturbances, gimbal)
     out = []
     for k in range(steps):
         advance(w, ds, 0.002 * math.sin(k / 7), (k + 1) * TE, v)

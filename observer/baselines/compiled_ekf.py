@@ -13,6 +13,7 @@ import math
 
 import numpy as np
 
+from observer.compiled_math import matmul
 from observer.jit import njit
 from observer.supervision.compiled_pair import response_and_slope
 
@@ -52,8 +53,8 @@ def update(mean, P, y, y_lo, y_hi, bounded, gain, offsets, response, R_diag, mod
             r = r * (noise_scale * noise_scale)
         R[j, j] = r
         j += 1
-    HP = _mm(H, P)
-    S = _mm(HP, H.T.copy()) + R
+    HP = matmul(H, P)
+    S = matmul(HP, H, True) + R
     Sinv = _inverse(S)
     nis = 0.0
     for a in range(k):
@@ -62,13 +63,13 @@ def update(mean, P, y, y_lo, y_hi, bounded, gain, offsets, response, R_diag, mod
     inconsistent = inconsistent + 1 if nis > lost_nis * k else 0
     if inconsistent >= lost_steps:
         return mean.copy(), P.copy(), inconsistent, True
-    K = _mm(Sinv, HP).T.copy()
+    K = matmul(Sinv, HP).T.copy()
     out = mean.copy()
     for a in range(2):
         for b in range(k):
             out[a] += K[a, b] * innov[b]
-    IKH = np.eye(2) - _mm(K, H)
-    P_new = _mm(_mm(IKH, P), IKH.T.copy()) + _mm(_mm(K, R), K.T.copy())
+    IKH = np.eye(2) - matmul(K, H)
+    P_new = matmul(matmul(IKH, P), IKH, True) + matmul(matmul(K, R), K, True)
     return out, P_new, inconsistent, False
 
 
@@ -101,20 +102,6 @@ def _inverse(S):
 
 
 @njit()
-def _mm(A, B):
-    """A @ B, summed in loop order."""
-    n, m, q = A.shape[0], B.shape[1], A.shape[1]
-    out = np.zeros((n, m))
-    for i in range(n):
-        for j in range(m):
-            s = 0.0
-            for t in range(q):
-                s += A[i, t] * B[t, j]
-            out[i, j] = s
-    return out
-
-
-@njit()
 def predict(mean, P, u, coef_phi, coef_rate, Q, box):
     """One step of the estimate ``mean`` (phi [rad], phidot [rad/s]) and P under input
     ``u`` [rad/s^2]: returns (mean, P, contained); ``contained`` False when the mean left
@@ -126,7 +113,7 @@ def predict(mean, P, u, coef_phi, coef_rate, Q, box):
     b1, b2, b3 = coef_rate[0], coef_rate[1], coef_rate[2]
     F = np.array([[1.0, a1 + a3 * d_drag], [0.0, b1 + b3 * d_drag]])
     out = np.array([phi + (a1 * rate + a2 * u + a3 * drag), b1 * rate + b2 * u + b3 * drag])
-    P_new = _mm(_mm(F, P), F.T.copy()) + Q
+    P_new = matmul(matmul(F, P), F, True) + Q
     contained = math.isfinite(P_new.sum())
     for i in range(2):
         if not (box[i, 0] <= out[i] <= box[i, 1]):

@@ -15,6 +15,7 @@ import math
 
 import numpy as np
 
+from observer.compiled_math import matmul
 from observer.jit import njit
 
 #: First index of each error-state block: position, velocity, attitude, the biases.
@@ -27,7 +28,7 @@ def rotation_exp(rotvec: np.ndarray) -> np.ndarray:
     x, y, z = rotvec[0], rotvec[1], rotvec[2]
     angle = math.sqrt(x**2 + y**2 + z**2)
     K = np.array([[x * 0.0, z * -1.0, y], [z, x * 0.0, x * -1.0], [y * -1.0, x, x * 0.0]])
-    K2 = _mm(K, K)
+    K2 = matmul(K, K)
     out = np.empty((3, 3))
     if angle < 1e-9:
         a, b = 1.0, 0.5
@@ -40,20 +41,6 @@ def rotation_exp(rotvec: np.ndarray) -> np.ndarray:
 
 
 @njit()
-def _mm(A: np.ndarray, B: np.ndarray) -> np.ndarray:
-    """A @ B of two small matrices, summed in loop order."""
-    n, m, k = A.shape[0], B.shape[1], A.shape[1]
-    out = np.zeros((n, m))
-    for i in range(n):
-        for j in range(m):
-            s = 0.0
-            for q in range(k):
-                s += A[i, q] * B[q, j]
-            out[i, j] = s
-    return out
-
-
-@njit()
 def propagate(position, velocity, attitude, gyro_bias, accel_bias, Ps, F, Q,
               delta_angle, delta_velocity, Te, gravity, displacements):
     """One IMU period of every row (``AidedINS.propagate_rows``): returns the new
@@ -62,13 +49,13 @@ def propagate(position, velocity, attitude, gyro_bias, accel_bias, Ps, F, Q,
     n = position.shape[0]
     pos, vel, att = np.empty_like(position), np.empty_like(velocity), np.empty_like(attitude)
     P_new, disp = np.empty_like(Ps), np.empty_like(displacements)
-    dth, dv, tmp = np.empty(3), np.empty(3), np.empty((15, 15))
+    dth, dv = np.empty(3), np.empty(3)
     for r in range(n):
         for i in range(3):
             dth[i] = delta_angle[r, i] - gyro_bias[r, i] * Te
             dv[i] = delta_velocity[r, i] - accel_bias[r, i] * Te
         turn = rotation_exp(dth)
-        R = _mm(attitude[r], turn)
+        R = matmul(attitude[r], turn)
         for i in range(3):
             s = 0.0
             for j in range(3):
@@ -83,7 +70,7 @@ def propagate(position, velocity, attitude, gyro_bias, accel_bias, Ps, F, Q,
         # R [dv]x, as R @ skew(dv)
         S = np.array([[dv[0] * 0.0, dv[2] * -1.0, dv[1]], [dv[2], dv[0] * 0.0, dv[0] * -1.0],
                       [dv[1] * -1.0, dv[0], dv[0] * 0.0]])
-        Rdv = _mm(R, S)
+        Rdv = matmul(R, S)
         f = F[r]
         for i in range(3):
             for j in range(3):
@@ -100,19 +87,10 @@ def propagate(position, velocity, attitude, gyro_bias, accel_bias, Ps, F, Q,
                 f[_P + i, _BG + j] = 0.5 * Te * f[_V + i, _BG + j]
                 f[_P + i, _BA + j] = 0.5 * Te * f[_V + i, _BA + j]
         # F P F^T + Q
-        p = Ps[r]
+        FPF = matmul(matmul(f, Ps[r]), f, True)
         for i in range(15):
             for j in range(15):
-                s = 0.0
-                for q in range(15):
-                    s += f[i, q] * p[q, j]
-                tmp[i, j] = s
-        for i in range(15):
-            for j in range(15):
-                s = 0.0
-                for q in range(15):
-                    s += tmp[i, q] * f[j, q]
-                P_new[r, i, j] = s + Q[i, j]
+                P_new[r, i, j] = FPF[i, j] + Q[i, j]
     return pos, vel, att, P_new, disp
 
 
@@ -141,5 +119,5 @@ def depth_update(position, velocity, attitude, gyro_bias, accel_bias, Ps, depth,
             dx[i] = ph[_TH + i] * gain
             bg[r, i] += ph[_BG + i] * gain
             ba[r, i] += ph[_BA + i] * gain
-        att[r] = _mm(attitude[r], rotation_exp(dx))
+        att[r] = matmul(attitude[r], rotation_exp(dx))
     return pos, vel, att, bg, ba
