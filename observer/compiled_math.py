@@ -43,3 +43,13 @@ def matmul(A: np.ndarray, B: np.ndarray, b_transposed: bool = False) -> np.ndarr
                 s += A[i, t] * (B[j, t] if b_transposed else B[t, j])
             out[i, j] = s
     return out
+
+
+@njit()
+def axis_f(angle: float, rate: float, u: float, a: np.ndarray, b: np.ndarray
+           ) -> tuple[float, float]:
+    """One step of an identified axis (angle [rad], rate [rad/s]) under input ``u``:
+    (angle + a1 rate + a2 u + a3 |rate| rate, b1 rate + b2 u + b3 |rate| rate), in the
+    order of the reference's plain-float path (``IdentifiedGimbalModel.f``)."""
+    drag = abs(rate) * rate
+    return angle + (a[0] * rate + a[1] * u + a[2] * drag), b[0] * rate + b[1] * u + b[2] * drag

@@ -78,6 +78,11 @@ class AxisRatioModel(DiscreteSystem):
         (a, b) = self._coef
         return np.stack([angle + feats @ a, feats @ b], axis=-1)
 
+    def compiled_f(self) -> tuple:
+        """f as the compiled kernels take it (:mod:`observer.kkl.compiled_fixed`): the
+        coefficients (a1, a2, a3) of the angle's step and (b1, b2, b3) of the rate's."""
+        return tuple(np.array(c, dtype=float) for c in self._coef)
+
     def h(self, x):
         angle, _ = np.moveaxis(np.asarray(x, dtype=float), -1, 0)
         return self._ratios(angle)

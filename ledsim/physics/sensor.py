@@ -16,7 +16,6 @@ Rays ignore geom group 3 (lenses, LED housing) and the gimbal's own body.
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass, field
 
 import numpy as np
 
@@ -27,6 +26,7 @@ from ledsim.physics.incidence import (
     photodiode_up,
 )
 from ledsim.physics.line_of_sight import check_line_of_sight
+from ledsim.physics.sensor_reading import SensorReading
 from ledsim.physics.world import LinkWorld
 from ledsim.radiometry.optics import (
     received_power,
@@ -34,52 +34,12 @@ from ledsim.radiometry.optics import (
     transmitter_gain,
     transmitter_gain_at,
 )
+from observer import jit
 from observer.noise import MeasurementNoise
 from observer.rowops import FLOATS
 
-
-@dataclass
-class SensorReading:
-    """One sample of the sensor. Arrays have one entry per photodiode.
-
-    Attributes:
-        power: measured photodiode_power with noise [W], shape (n_pd,), in the
-            receiver layout's order.
-        power_clean: the same without noise [W].
-        incidence_angle: signed phi of each photodiode [rad].
-        emission_angle: theta of each photodiode [rad].
-        distance: LED-photodiode distance [m].
-        visible_fraction: share of aperture rays that reach the LED [-].
-        phi, phidot: the true state x = (phi, phidot) of the reference photodiode
-            [rad, rad/s].
-        gimbal_angle, gimbal_rate: the gimbal encoder: hinge angle [rad] and rate [rad/s].
-        hull_pos: the AUV's position [m], shape (3,).
-        elevation, elevation_rate: on a pan-tilt head, the reference photodiode's
-            elevation [rad] and its rate [rad/s], and phidot is its azimuth's rate about
-            its own up (:func:`~ledsim.physics.incidence.head_rates`); None on one axis.
-    """
-
-    power: np.ndarray
-    power_clean: np.ndarray
-    incidence_angle: np.ndarray
-    emission_angle: np.ndarray
-    distance: np.ndarray
-    visible_fraction: np.ndarray
-    phi: float
-    phidot: float
-    gimbal_angle: float
-    gimbal_rate: float
-    hull_pos: np.ndarray
-    elevation: float | None = field(default=None, kw_only=True)
-    elevation_rate: float | None = field(default=None, kw_only=True)
-
-    @property
-    def x(self) -> np.ndarray:
-        """The true state of the reference photodiode: (phi [rad], phidot [rad/s]), or
-        on a pan-tilt head (azimuth, elevation [rad], their rates [rad/s])."""
-        if self.elevation is None:
-            return np.array([self.phi, self.phidot])
-        return np.array([self.phi, self.elevation, self.phidot, self.elevation_rate])
+compiled_sensor = jit.lazy("ledsim.physics.compiled_sensor")
+__all__ = ["IrradianceSensor", "SensorReading"]  # SensorReading: its old home
 
 
 class IrradianceSensor:
@@ -182,7 +142,10 @@ class IrradianceSensor:
             receiver_response_at(phi, c.receiver, o)
 
     def read(self, noise: bool = True) -> SensorReading:
-        """Sample every photodiode at the current MjData state."""
+        """Sample every photodiode at the current MjData state (on the compiled path,
+        :mod:`ledsim.physics.compiled_sensor`, to the same bits)."""
+        if jit.enabled():
+            return self._compiled_read(noise)
         geo = self.geometry()
         clean = np.array([self.clean_power_at(*g) for g in zip(*geo, strict=True)])
         dist, theta, phi, vis = (np.array(v) for v in geo)
@@ -201,6 +164,29 @@ class IrradianceSensor:
         return SensorReading(power, clean, phi, theta, dist, vis, float(phi[ref]),
                              self.incidence_rate(ref), w.gimbal_angle, w.gimbal_rate,
                              w.hull_pos.copy())
+
+    def _compiled_read(self, noise: bool) -> SensorReading:
+        reader = self.__dict__.get("_reader")
+        if reader is None:
+            reader = self._reader = compiled_sensor.Reader(self)
+        w, ref = self.world, self._reference
+        reader.read(self, self.constants.link is not None)
+        clean = reader.clean.copy()
+        if w.light_gain is not None:
+            clean = clean * w.light_gain
+        measured = self.calibrated(clean)
+        power = self.noisy(measured) if noise else measured + 0.0
+        phi = reader.phi.copy()
+        fields = (power, clean, phi, reader.theta.copy(), reader.d.copy(),
+                  reader.vis.copy(), float(phi[ref]))
+        if self._head:
+            rate, elevation, elevation_rate = self.head_truth(
+                reader.up[ref].tolist(), float(reader.elevation[ref]))
+            return SensorReading(*fields, rate, w.gimbal_angle, w.gimbal_rate,
+                                 w.hull_pos.copy(), elevation=elevation,
+                                 elevation_rate=elevation_rate)
+        return SensorReading(*fields, self.incidence_rate(ref), w.gimbal_angle,
+                             w.gimbal_rate, w.hull_pos.copy())
 
     def calibrated(self, clean: np.ndarray) -> np.ndarray:
         """What the channels put out for the light ``clean`` [W] they get: times their
@@ -258,17 +244,22 @@ class IrradianceSensor:
         return np.array([receiver_response_at(e, self.constants.receiver)
                          for e in self.elevation()])
 
-    def head_truth(self) -> tuple[float, float, float]:
+    def head_truth(self, up: list | None = None, elevation: float | None = None
+                   ) -> tuple[float, float, float]:
         """On a pan-tilt head, the reference photodiode's azimuth rate [rad/s],
         elevation [rad] and elevation rate [rad/s]
-        (:func:`~ledsim.physics.incidence.head_rates`)."""
+        (:func:`~ledsim.physics.incidence.head_rates`); ``up`` and ``elevation``: its up
+        and elevation where the caller has them (the compiled reading)."""
         w, i = self.world, self._reference
         normal = w.photodiode_normal(i).tolist()
-        up = self._up(normal, w.hinge_axis.tolist())
+        if up is None:
+            up = self._up(normal, w.hinge_axis.tolist())
         az_rate, el_rate = head_rates(FLOATS, (w.led_pos - w.photodiode_pos(i)).tolist(),
                                       w.photodiode_velocity(i).tolist(),
                                       w.transmitter_velocity.tolist(), up, normal)
-        return az_rate, self._tilted_elevation()[i], el_rate
+        if elevation is None:
+            elevation = self._tilted_elevation()[i]
+        return az_rate, elevation, el_rate
 
     def incidence_rate(self, i: int) -> float:
         """d(phi_i)/dt [rad/s]: line-of-sight rotation minus photodiode rotation, about the

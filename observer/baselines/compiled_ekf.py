@@ -13,7 +13,7 @@ import math
 
 import numpy as np
 
-from observer.compiled_math import matmul
+from observer.compiled_math import axis_f, matmul
 from observer.jit import njit
 from observer.supervision.compiled_pair import response_and_slope
 
@@ -107,12 +107,10 @@ def predict(mean, P, u, coef_phi, coef_rate, Q, box):
     ``u`` [rad/s^2]: returns (mean, P, contained); ``contained`` False when the mean left
     ``box`` ((2, 2): each state's bounds) or P is not finite (the caller starts the
     filter again)."""
-    phi, rate = mean[0], mean[1]
-    drag, d_drag = abs(rate) * rate, 2 * abs(rate)
-    a1, a2, a3 = coef_phi[0], coef_phi[1], coef_phi[2]
-    b1, b2, b3 = coef_rate[0], coef_rate[1], coef_rate[2]
-    F = np.array([[1.0, a1 + a3 * d_drag], [0.0, b1 + b3 * d_drag]])
-    out = np.array([phi + (a1 * rate + a2 * u + a3 * drag), b1 * rate + b2 * u + b3 * drag])
+    d_drag = 2 * abs(mean[1])
+    F = np.array([[1.0, coef_phi[0] + coef_phi[2] * d_drag],
+                  [0.0, coef_rate[0] + coef_rate[2] * d_drag]])
+    out = np.array(axis_f(mean[0], mean[1], u, coef_phi, coef_rate))
     P_new = matmul(matmul(F, P), F, True) + Q
     contained = math.isfinite(P_new.sum())
     for i in range(2):

@@ -15,10 +15,13 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from observer import jit
 from observer.estimator import Estimator, usable_mask
 from observer.exceptions import ObserverError
 from observer.kkl.nets import NumpyMLP
 from observer.system import DiscreteSystem
+
+compiled_fixed = jit.lazy("observer.kkl.compiled_fixed")
 
 
 @dataclass(frozen=True)
@@ -118,6 +121,11 @@ class KKLObserver(Estimator):
         decoder_T_star: numpy MLP z -> x.
         u_bar: the constant input the maps were learned for.
         use_omega: apply the Omega(z, u) correction when u != u_bar.
+
+    On the compiled path (:mod:`observer.jit`) a two-state system that gives its f as
+    numbers (``compiled_f``: the identified gimbal model, one axis of a pan-tilt head),
+    with maps of one hidden layer, runs :mod:`observer.kkl.compiled_fixed`; this class's
+    methods stay the reference.
     """
 
     name = "kkl"
@@ -163,8 +171,37 @@ class KKLObserver(Estimator):
         self._xhat = None
         self.outside_domain = False
 
+    def _compiled_numbers(self) -> tuple | None:
+        """The kernels' constants (f's coefficients, the box, the outputs' bounds, the
+        maps' weights), or None where the reference runs."""
+        nets = (self.encoder_T, self.decoder_T_star)
+        numbers = getattr(self, "_numbers", None)
+        if numbers is None or numbers[0] is not nets[0] or numbers[1] is not nets[1]:
+            s = self.system
+            numbers = (*nets, None)  # the maps they are for, then the constants
+            if hasattr(s, "compiled_f") and s.n_state == 2 and s.n_input == 1 and all(
+                    isinstance(n, NumpyMLP) and not n.mid and n.W1.dtype == np.float64
+                    for n in nets):
+                bounded = s.output_low is not None
+                y_box = [np.ascontiguousarray(np.broadcast_to(
+                    np.asarray(v if bounded else 0.0, dtype=float), (s.n_output,)))
+                    for v in (s.output_low, s.output_high)]
+                box = [np.array(v, dtype=float) for v in zip(*self._box, strict=True)]
+                numbers = (*nets, (tuple(np.ascontiguousarray(c, dtype=float)
+                                         for c in s.compiled_f()), *box, *y_box, bounded,
+                                   *(tuple(n._compiled_weights()) for n in nets)))
+            self._numbers = numbers
+        return numbers[2] if jit.enabled() else None
+
     def update(self, y) -> np.ndarray:
         y = np.asarray(y, dtype=float)
+        c = self._compiled_numbers()
+        if c is not None and y.ndim == 1:
+            xhat, inside, usable = compiled_fixed.update(self.z, y, *c[7], *c[1:6])
+            self._xhat, self.outside_domain = xhat, not inside
+            self._y = y if usable else \
+                np.where(usable_mask(self.system, y), y, self.system.h(xhat))
+            return xhat
         self._xhat = self.decoder_T_star.vector(self.z)
         self.outside_domain = not self.in_domain(self._xhat)
         ok = usable_mask(self.system, y)
@@ -175,6 +212,13 @@ class KKLObserver(Estimator):
         return self._xhat
 
     def predict(self, u) -> None:
+        c = self._compiled_numbers()
+        if c is not None and isinstance(u, float | int):
+            self.z, inside = compiled_fixed.predict(
+                self.z, self._y, self._xhat, float(u), self.u_bar, bool(self.use_omega),
+                self.eigenvalues, self.B, *c[0], *c[6], *c[1:3])
+            self.outside_domain = self.outside_domain or not inside
+            return
         z_next = self.eigenvalues * self.z + self.B @ self._y
         moved = (u != self.u_bar) if isinstance(u, float | int) else \
             np.any(np.asarray(u, dtype=float) != self.u_bar)

@@ -73,6 +73,12 @@ class NumpyMLP:
             h = np.tanh(h @ WT + b)
         return h @ self._W2T + self.b2
 
+    def _compiled_weights(self) -> tuple[np.ndarray, ...]:
+        """(W1^T, b1, W2, b2) contiguous, as the compiled kernels take one hidden
+        layer (:func:`observer.kkl.compiled_fixed.mlp`)."""
+        return tuple(np.ascontiguousarray(a) for a in (self._W1T, self.b1, self.W2,
+                                                        self.b2))
+
     def astype(self, dtype) -> NumpyMLP:
         """A copy with weights of another dtype (float32 doubles batched throughput)."""
         return NumpyMLP(*(np.asarray(a, dtype=dtype) for a in (self.W1, self.b1, self.W2,
