@@ -35,7 +35,6 @@ class ControlLaw(Protocol):
     tracks_beam: bool
 
 
-@functools.lru_cache(maxsize=64)
 @functools.lru_cache(maxsize=64)  # every law start and re-seed asks for it
 def intensity_maximum(constants: LinkConstants) -> float:
     """phi [rad] at which photodiode 1 receives the most power (the alignment target)."""

@@ -147,7 +147,16 @@ class AxisRatioModel(DiscreteSystem):
     def split(self, y) -> np.ndarray:
         """This axis's outputs from the head's powers ``y`` [W], each channel first
         divided by its calibrated gain (the head model's ``channel_gains``)."""
-        y = np.asarray(y, dtype=float) / self.head.channel_gains
+        y = np.asarray(y, dtype=float)
+        g = self.head.channel_gains
+        if y.ndim == 1:  # one sample (the step's): the same divisions in plain floats
+            v, g = y.tolist(), g.tolist()
+            (i, j), ref = self.pair, self.reference
+            p0 = v[ref] / g[ref] if g[ref] else 0.0
+            if p0 and g[i] and g[j]:  # no zero to divide by (numpy's inf or NaN there)
+                return np.array([v[i] / g[i] / p0, v[j] / g[j] / p0])
+            g = self.head.channel_gains
+        y = y / g
         return y[..., list(self.pair)] / y[..., self.reference, None]
 
 

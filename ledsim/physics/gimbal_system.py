@@ -218,6 +218,11 @@ class IdentifiedGimbalModel(DiscreteSystem):
         return (self.power_gain, np.asarray(self._offsets, dtype=float),
                 np.array([r.a1, r.b1, r.c1, r.a2, r.b2, r.c2], dtype=float))
 
+    @property
+    def rate_coefficients(self) -> tuple[float, float, float]:
+        """(b1, b2, b3) of the rate's step, rate' = b1 rate + b2 u + b3 |rate| rate."""
+        return tuple(self._coef_rate)
+
     def compiled_f(self) -> tuple:
         """f as the compiled kernels take it (:mod:`observer.baselines.compiled_ekf`): the
         coefficients (a1, a2, a3) and (b1, b2, b3) of the class docstring."""

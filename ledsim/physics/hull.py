@@ -65,17 +65,22 @@ class HullAccess:
         applied."""
         ids, lo, hi = self._thruster_range()
         ctrl = self.data.ctrl
-        ctrl[ids] = np.clip(np.asarray(command, dtype=float), lo, hi)
-        return ctrl[ids]
+        # np.clip's values (NaN kept) in plain floats: numpy's calls cost 5x the rest.
+        out = []
+        for i, x, a, b in zip(ids, np.asarray(command, dtype=float).tolist(), lo, hi,
+                              strict=True):
+            ctrl[i] = v = a if x < a else (b if x > b else x)
+            out.append(v)
+        return np.array(out)
 
-    def _thruster_range(self) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    def _thruster_range(self) -> tuple[list, list, list]:
         """(actuator ids, lower limits, upper limits) of the thrusters (the model's
-        ``ctrlrange``, read once)."""
+        ``ctrlrange``, read once), as lists."""
         cached = getattr(self, "_thrusters_cached", None)
         if cached is None or cached[3] is not self.model:
             ids = np.array(self.ids.thrusters)
-            lo, hi = self.model.actuator_ctrlrange[ids].T.copy()
-            cached = self._thrusters_cached = (ids, lo, hi, self.model)
+            lo, hi = self.model.actuator_ctrlrange[ids].T.tolist()
+            cached = self._thrusters_cached = (ids.tolist(), lo, hi, self.model)
         return cached[:3]
 
     def thrust_limits(self) -> np.ndarray:
@@ -99,8 +104,13 @@ class HullAccess:
         height [m]), which MuJoCo's gravity compensation at the centre of mass lacks."""
         hull = self.ids.hull_body
         m = self.model
-        k = float(m.body_mass[hull] * m.body_gravcomp[hull]) * math.sqrt(
-            float(m.opt.gravity @ m.opt.gravity)) * self.config.metacentric_height
+        key = (float(m.body_gravcomp[hull]), m)  # the buoyancy may change (set_hull_buoyancy)
+        cached = getattr(self, "_righting", None)
+        if cached is None or cached[0] != key[0] or cached[1] is not m:
+            k = float(m.body_mass[hull] * m.body_gravcomp[hull]) * math.sqrt(
+                float(m.opt.gravity @ m.opt.gravity)) * self.config.metacentric_height
+            cached = self._righting = (*key, k)
+        k = cached[2]
         R = self.data.xmat[hull]  # z_hull = (R[2], R[5], R[8]); z_hull x z = (R[5], -R[2], 0)
         xfrc = self.data.xfrc_applied[hull]
         xfrc[:] = (0.0, 0.0, 0.0, k * R[5], -k * R[2], 0.0)

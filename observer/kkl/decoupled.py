@@ -60,6 +60,8 @@ class PerAxis(Estimator):
         return self.x.copy()
 
     def predict(self, u) -> None:
-        u = np.broadcast_to(np.asarray(u, dtype=float), (len(self.axes),))
-        for e, v in zip(self.axes, u.tolist(), strict=True):
+        u, n = np.asarray(u, dtype=float), len(self.axes)
+        # broadcast_to only where needed: it alone cost 10 us a step
+        for e, v in zip(self.axes, (u if u.shape == (n,) else np.broadcast_to(u, (n,))
+                                    ).tolist(), strict=True):
             e.predict(v)

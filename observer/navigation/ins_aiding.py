@@ -22,6 +22,15 @@ FIX_GATE = 21.11
 compiled_ins = jit.lazy("observer.navigation.compiled_ins")
 
 
+def _like(v, shape_of: np.ndarray) -> np.ndarray:
+    """``v`` as a contiguous float array of ``shape_of``'s shape (broadcast where it is
+    not already one: ``np.broadcast_to`` alone costs a step's 10 us)."""
+    v = np.asarray(v, dtype=float)
+    if v.shape != shape_of.shape:
+        v = np.broadcast_to(v, shape_of.shape)
+    return np.ascontiguousarray(v)
+
+
 class InsAiding:
     """The updates, mixed into :class:`~observer.navigation.ins.AidedINS` (which holds ``states``,
     ``Ps``, ``noise``, ``field``, the DVL's geometry and the displacement history)."""
@@ -89,8 +98,7 @@ class InsAiding:
             s.position, s.velocity, s.attitude, s.gyro_bias, s.accel_bias = \
                 compiled_ins.depth_update(
                     s.position, s.velocity, s.attitude, s.gyro_bias, s.accel_bias, self.Ps,
-                    np.ascontiguousarray(depth, dtype=float),
-                    np.ascontiguousarray(np.broadcast_to(surface, depth.shape), dtype=float),
+                    np.ascontiguousarray(depth, dtype=float), _like(surface, depth),
                     self.noise.depth_noise**2)
             return
         r = depth - (surface - s.position[:, 2])

@@ -78,11 +78,22 @@ class LoadObserver:
         self._rate: float | None = None
         self.large = False  # following a load beyond ``limit``
 
+    def _rate_step(self, rate: float, u: float) -> float:
+        """The model's next rate [rad/s] from ``rate`` under ``u``: f's second
+        component, in plain floats where the model gives its coefficients
+        (``rate_coefficients``: b1 r + b2 u + b3 |r| r, in f's order)."""
+        coefs = getattr(self.model, "rate_coefficients", None)
+        if coefs is None:
+            return float(self.model.f(np.array([0.0, rate]), u)[1])
+        b1, b2, b3 = coefs
+        u, drag = float(u), abs(rate) * rate
+        return b1 * rate + b2 * u + b3 * drag
+
     def update(self, inertial_rate: float, u: float) -> float:
         """The load predicted for the next step [rad/s^2], from the gimbal's inertial
         rate [rad/s] and the input u the motor gave over the last step [rad/s^2]."""
         if self._rate is not None:
-            predicted = float(self.model.f(np.array([0.0, -self._rate]), u)[1])
+            predicted = self._rate_step(-self._rate, u)
             missed = (-inertial_rate - predicted) / self.input_gain
             still = abs(inertial_rate) <= self.still_rate
             if self.large or abs(missed) > self.limit:
