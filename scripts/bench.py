@@ -102,6 +102,21 @@ def physics_floor(seconds: float = 10.0, repeats: int = 5) -> tuple[float, float
     return 1e6 / best, 1e6 / best * world.config.constants.Te
 
 
+def head_floor_us(seconds: float = 10.0, repeats: int = 5) -> float:
+    """Microseconds per control step of the bare physics of the CLI's default head's
+    world (the pan-tilt with its quad on ``luma``, its vehicle's thrusters at rest): the
+    substeps and its five photodiodes' ``mj_multiRay`` calls, the best of ``repeats``."""
+    from ledsim.loop.run_config import RunConfig
+    from ledsim.physics.world import LinkWorld
+
+    world = LinkWorld(RunConfig(scenario="align", link="luma").world_config())
+    best = np.inf
+    for _ in range(repeats):
+        world.reset()
+        best = min(best, floor_us(world, seconds))
+    return best
+
+
 def rollout_speed(n_worlds: int, seconds: float = 5.0) -> float:
     """Control steps per second of ``mujoco.rollout`` stepping ``n_worlds`` copies of the
     scene open loop (physics only, one thread): the batched floor."""
@@ -437,12 +452,18 @@ def main() -> None:
               f"{ref['us_per_seed_step_64'] / c['us_per_seed_step_64']:.2f}x on 64 seeds, "
               f"{ref['one_seed_us_per_step'] / c['one_seed_us_per_step']:.2f}x on one seed.",
               "", "One seed's step (us) with the EKF on the same bench, and with the "
-              "CLI's default head (`ledsim run`'s: the pan-tilt with its quad on `luma`, "
-              "whose per-axis KKLs and head supervisor are not compiled yet; its vehicle "
-              "is):", "", "| path | EKF, paper's bench | default head |", "|---|---|---|"]
+              "CLI's default head (`ledsim run`'s: the pan-tilt with its quad on `luma`: "
+              "its sensor, per-axis KKLs and vehicle run compiled, its head supervisor "
+              "does not yet):", "", "| path | EKF, paper's bench | default head |", "|---|---|---|"]
+    head_floor = head_floor_us()
     for name, r in (("numpy reference", ref), ("compiled", c)):
         lines.append(f"| {name} | {r['one_seed_ekf_us_per_step']:.0f} "
                      f"| {r['default_head_us_per_step']:.0f} |")
+    lines += ["", f"The default head's own physics floor (its substeps and its five "
+              f"photodiodes' ray casts) is {head_floor:.1f} us a step: the compiled head "
+              f"runs at {head_floor / c['default_head_us_per_step']:.2f} of it, the "
+              f"reference at {head_floor / ref['default_head_us_per_step']:.2f}."]
+    ab["default_head_floor_us"] = head_floor
     lines += ["", "## Closed loop in MuJoCo (align scenario, 10 s, one core)", "",
               "| estimator | real-time factor of the loop | over the physics floor "
               "| us per step | estimator us / step |", "|---|---|---|---|---|"]

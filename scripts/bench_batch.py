@@ -65,7 +65,8 @@ def measure(quick: bool) -> dict:
 
 def floor_us(world, seconds: float) -> float:
     """Microseconds per control step of the bare physics of ``world``: the substeps of
-    one period and the sensor's two ``mj_multiRay`` calls, nothing else."""
+    one period and the sensor's ``mj_multiRay`` calls (one a photodiode: two on the
+    paper's bench, five on a quad head), nothing else."""
     import mujoco
     import numpy as np
 
@@ -76,7 +77,8 @@ def floor_us(world, seconds: float) -> float:
     steps = int(round(seconds / world.config.constants.Te))
     geom, dist = np.zeros(n_rays, dtype=np.int32), np.zeros(n_rays)
     dirs = np.tile([1.0, 0.0, 0.0], n_rays)
-    origins = [world.photodiode_pos(i).copy() for i in range(2)]
+    origins = [world.photodiode_pos(i).copy()
+               for i in range(world.config.constants.layout.n_photodiodes)]
     body = world.ids.gimbal_body
     t0 = time.perf_counter()
     for _ in range(steps):

@@ -8,15 +8,12 @@ import numpy as np
 import pytest
 
 from observer import jit
-from tests.test_compiled import compiled_differences
+from tests.test_compiled import KINDS, compiled_differences
 
 pytestmark = pytest.mark.skipif(not jit.installed(), reason="numba is not installed")
 
-KINDS = ((), ("vibration:frequency=3,torque=0.5,force=2",), ("occlusion:start=1,duration=0.5",),
-         ("kick:start=1,rate=3,hull=1",))
 
-
-@pytest.mark.parametrize("kinds", KINDS, ids=["none", "vibration", "occlusion", "hull_kick"])
+@pytest.mark.parametrize("kinds", KINDS, ids=lambda k: k[0].split(":")[0] if k else "none")
 def test_the_default_heads_compiled_kkl_gives_the_references_estimates(kinds, monkeypatch):
     """The CLI's default run (the pan-tilt with its quad on ``luma``): a fresh per-axis
     KKL given a run's calls, on the reference path bit for bit, on the compiled path
