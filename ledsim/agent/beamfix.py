@@ -40,9 +40,12 @@ class BeamFix:
         # (step, weight [1/rad^2], target encoder angle [rad], gain [W]) of each sample.
         self._samples: deque = deque()
         self._step = 0
+        # While the samples stand: their weighted means by column, and (at -1) their weight.
+        self._means: dict[int, float | None] = {}
 
     def clear(self) -> None:
         self._samples.clear()
+        self._means.clear()
 
     @property
     def samples(self) -> int:
@@ -56,6 +59,7 @@ class BeamFix:
         self._step += 1
         while self._samples and self._step - self._samples[0][0] > self.memory_steps:
             self._samples.popleft()
+            self._means.clear()
         powers = [float(v) for v in y]
         bar = self.detect_sigmas * noise_std
         if not all(p > bar for p in powers):  # dark, gated out (NaN) or in the noise
@@ -71,6 +75,7 @@ class BeamFix:
                 var + self.stderr**2):
             self._samples.clear()
         self._samples.append((self._step, 1.0 / var, target, gain))
+        self._means.clear()
         return True
 
     def phi_variance(self, phi: float, powers, noise_std: float) -> float:
@@ -79,9 +84,19 @@ class BeamFix:
         return pair_phi_variance(phi, powers, noise_std, self.c)
 
     def _weighted_mean(self, column: int) -> float | None:
-        """The inverse-variance weighted mean of a sample column (None: no sample)."""
-        w = sum(s[1] for s in self._samples)
-        return sum(s[1] * s[column] for s in self._samples) / w if w > 0 else None
+        """The inverse-variance weighted mean of a sample column (None: no sample), kept
+        until the samples change (a step asks for the target several times)."""
+        if column not in self._means:
+            w = self._weight()
+            self._means[column] = sum(s[1] * s[column] for s in self._samples) / w \
+                if w > 0 else None
+        return self._means[column]
+
+    def _weight(self) -> float:
+        """The samples' summed weight [1/rad^2], kept as the means are."""
+        if -1 not in self._means:
+            self._means[-1] = sum(s[1] for s in self._samples)
+        return self._means[-1]
 
     @property
     def target(self) -> float | None:
@@ -91,7 +106,7 @@ class BeamFix:
     @property
     def stderr(self) -> float:
         """Standard error of :attr:`target` [rad] (inf: no sample)."""
-        w = sum(s[1] for s in self._samples)
+        w = self._weight()
         return 1.0 / math.sqrt(w) if w > 0 else math.inf
 
     @property
