@@ -1,6 +1,6 @@
 """The fixed-gain KKL's update and predict (:class:`~observer.kkl.fixed_gain.KKLObserver`),
 compiled: one call each a step, for a system that gives its f as numbers
-(``compiled_f``: the rate's and the angle's coefficients, as the identified gimbal model
+(``compiled_f``: the angle's and the rate's coefficients, as the identified gimbal model
 and one axis of a pan-tilt head give them) and maps of one hidden layer.
 
 The reference makes a dozen numpy calls a step (the decoder, and with an input the
