@@ -90,3 +90,25 @@ def _step(obs, c, W1T, b1, W2, b2):
 
     return compiled_fixed.predict(obs.z, obs._y, obs._xhat, 0.5, obs.u_bar, True,
                                   obs.eigenvalues, obs.B, *c[0], W1T, b1, W2, b2, *c[1:3])
+
+
+def test_the_compiled_axis_fix_is_the_references_to_the_bit():
+    """A pan-tilt axis's fix from the head's powers: the same angle, or the same None
+    (a missing or dark power, off the grid, a shaded photodiode), on both paths."""
+    system = _axis_observer().system
+    head = system.head
+    rng = np.random.default_rng(6)
+    outcomes = set()
+    for k in range(3000):
+        x = np.array([rng.normal(scale=0.3), rng.normal(scale=0.3), 0.0, 0.0])
+        y = head.h(x) * (1 + rng.normal(scale=0.02, size=head.n_output))
+        if k % 7 == 0:
+            y[rng.integers(y.size)] *= rng.choice([0.0, 0.3, np.nan, -1.0, 3.0])
+        with jit.use(False):
+            ref = system.fix(y)
+        with jit.use(True):
+            got = system.fix(y)
+        assert (ref is None and got is None) or (ref == got and type(got) is float), \
+            (y, ref, got)
+        outcomes.add(ref is None)
+    assert outcomes == {True, False}

@@ -10,8 +10,11 @@ import numpy as np
 
 from ledsim.physics.head_model import HeadModel
 from ledsim.radiometry.optics import receiver_response, receiver_response_at
+from observer import jit
 from observer.noise import MeasurementNoise
 from observer.system import DiscreteSystem
+
+compiled_axis = jit.lazy("ledsim.physics.compiled_axis")
 
 
 class AxisRatioModel(DiscreteSystem):
@@ -103,6 +106,16 @@ class AxisRatioModel(DiscreteSystem):
         inverted on a grid. None: a power is missing or not positive, the value is off
         the grid's range, or the powers disagree with one direction (the pair's log
         product off the receiver's by more than ``tolerance``: a shaded photodiode)."""
+        if self._fix_grid is None:
+            angle = np.linspace(-0.8, 0.8, 1601)
+            r = self._ratios(angle)
+            v = np.log(r[:, 0]) - np.log(r[:, 1])
+            order = np.argsort(v)
+            self._fix_grid = (v[order].tolist(), angle[order].tolist())
+        if jit.enabled():
+            out = compiled_axis.fix(np.asarray(y, dtype=float), *self._fix_numbers(),
+                                    float(tolerance))
+            return None if out != out else out
         # Plain floats: two ratios a step, where numpy's per-call cost was most of it.
         y = np.asarray(y, dtype=float).tolist()
         gains = self._gains
@@ -112,12 +125,6 @@ class AxisRatioModel(DiscreteSystem):
                 and math.isfinite(pj)):
             return None
         log_plus, log_minus = math.log(pi / p0), math.log(pj / p0)
-        if self._fix_grid is None:
-            angle = np.linspace(-0.8, 0.8, 1601)
-            r = self._ratios(angle)
-            v = np.log(r[:, 0]) - np.log(r[:, 1])
-            order = np.argsort(v)
-            self._fix_grid = (v[order].tolist(), angle[order].tolist())
         v, angle = self._fix_grid
         value = log_plus - log_minus
         if not v[0] <= value <= v[-1]:
@@ -133,6 +140,17 @@ class AxisRatioModel(DiscreteSystem):
         if abs(log_plus + log_minus - expected) > tolerance:
             return None
         return fix
+
+    def _fix_numbers(self) -> tuple:
+        """:func:`~ledsim.physics.compiled_axis.fix`'s constants, built once."""
+        if getattr(self, "_fix_kernel", None) is None:
+            r = self.constants.receiver
+            (i, j), grid = self.pair, self._fix_grid
+            self._fix_kernel = (np.array(self._gains), i, j, self.reference,
+                                *(np.array(g) for g in grid),
+                                np.array(self.turns, dtype=float),
+                                np.array([r.a1, r.b1, r.c1, r.a2, r.b2, r.c2], dtype=float))
+        return self._fix_kernel
 
     def step_form(self):
         """f and h for an exported observer (:class:`observer.kkl.export.StepForm`): h
