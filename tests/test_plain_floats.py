@@ -82,3 +82,16 @@ def test_the_load_observers_rate_step_is_the_models(kind):
         rate, u = rng.normal(scale=5.0), rng.normal(scale=50.0)
         ref = float(model.f(np.array([0.0, rate]), u)[1])
         assert obs._rate_step(rate, u) == ref
+
+
+def test_the_heads_motors_clip_as_numpy_does():
+    loop = ClosedLoop(RunConfig(scenario="align", seconds=0.1, link="luma"), range(1))
+    world = loop.runs[0].world
+    lim = world.config.torque_limit
+    rng = np.random.default_rng(4)
+    for _ in range(500):
+        torques = rng.normal(size=world.n_axes) * 2 * lim
+        torques[rng.integers(world.n_axes)] = rng.choice(SPECIALS)
+        ref = np.clip(torques, -lim, lim)
+        assert world.set_torques(torques).tobytes() == ref.tobytes()
+        assert world.torques.tobytes() == ref.tobytes()
