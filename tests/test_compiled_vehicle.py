@@ -136,3 +136,29 @@ def test_station_keeping_pd_matches_the_reference_across_the_heading_wrap():
                      surface[i], *d, *vel[i], omega[i, 1], omega[i, 2], *hv[i])
         np.testing.assert_allclose(got[i], _pd_terms(FLOATS, g, kp, kd, x), rtol=1e-12,
                                    atol=1e-14)
+
+
+def test_a_line_of_sight_constant_set_after_construction_reaches_both_paths():
+    """The filter's constants are one array the kernel reads: a pull set afterwards
+    moves the compiled step as it moves the reference."""
+    from observer.navigation.line_of_sight import LineOfSightFilter
+
+    rng = np.random.default_rng(7)
+    inputs = [(rng.normal(scale=0.2, size=(1, 3)), rng.normal(scale=0.1, size=1),
+               rng.normal(scale=0.05, size=1), rng.normal(scale=0.1, size=1))
+              for _ in range(200)]
+    bearings = {}
+    for compiled in (False, True):
+        for pull in (None, 0.5):
+            f = LineOfSightFilter(0.01, 20.0, 1e-3)
+            if pull is not None:
+                f.k_bearing = pull
+                assert f.k_bearing == pull
+            with jit.use(compiled):
+                for args in inputs:
+                    f.update_rows(*args)
+            bearings[compiled, pull] = f.bearing.copy()
+    assert not np.allclose(bearings[False, None], bearings[False, 0.5])
+    for pull in (None, 0.5):
+        np.testing.assert_allclose(bearings[True, pull], bearings[False, pull], rtol=1e-12,
+                                   atol=1e-15)

@@ -55,6 +55,13 @@ class LineOfSight:
         return self.rate - self.hull_rate
 
 
+def _constant(index: int, doc: str) -> property:
+    """One of :class:`LineOfSightFilter`'s constants, read from and written to its
+    ``_constants`` array."""
+    return property(lambda self: float(self._constants[index]),
+                    lambda self, value: self._constants.__setitem__(index, value), doc=doc)
+
+
 class LineOfSightFilter(Rows):
     """The estimator of the module docstring.
 
@@ -79,11 +86,13 @@ class LineOfSightFilter(Rows):
                  rate_time: float = 0.05, bearing_time: float = 2.0,
                  reanchor_rate: float = 3.0, reanchor_time: float = 1.0,
                  reanchor_bearing_time: float = 0.2):
-        self.Te, self.distance, self.rate_noise = Te, distance, rate_noise
-        self.k_rate, self.k_power = min(1.0, Te / rate_time), min(1.0, Te / 0.5)
-        self.k_bearing = min(1.0, Te / bearing_time)
-        self.reanchor_rate, self.reanchor_time = reanchor_rate, reanchor_time
-        self.k_reanchor = min(1.0, Te / reanchor_bearing_time)
+        # The filter's constants live in the one array the compiled step takes (their
+        # names are properties over it: a change reaches both paths).
+        self._constants = np.array([min(1.0, Te / rate_time), min(1.0, Te / 0.5), Te,
+                                    reanchor_rate, reanchor_time,
+                                    min(1.0, Te / reanchor_bearing_time),
+                                    min(1.0, Te / bearing_time)], float)
+        self.distance, self.rate_noise = distance, rate_noise
         self.single, self.n = True, 1
         self._noise_power = np.array([rate_noise**2])
         self.rate, self.acceleration = np.zeros(1), np.zeros(1)
@@ -93,8 +102,14 @@ class LineOfSightFilter(Rows):
         #: Each vehicle's range to the LED [m]: the told distance, or where a moving
         #: vehicle's navigation puts it (set by its owner each step).
         self.ranges = np.array([float(distance)])
-        self._constants = np.array([self.k_rate, self.k_power, Te, reanchor_rate,
-                                    reanchor_time, self.k_reanchor, self.k_bearing], float)
+
+    k_rate = _constant(0, "the rate's low-pass gain a step [-]")
+    k_power = _constant(1, "the rate power's low-pass gain a step [-]")
+    Te = _constant(2, "the step [s]")
+    reanchor_rate = _constant(3, "the rate that counts as a violent excursion [rad/s]")
+    reanchor_time = _constant(4, "how long the stronger pull lasts after one [s]")
+    k_reanchor = _constant(5, "the bearing's pull a step after one [-]")
+    k_bearing = _constant(6, "the bearing's pull a step [-]")
 
     def los_of(self, i: int) -> LineOfSight:
         """Vehicle ``i``'s line of sight at its last step."""
