@@ -72,3 +72,28 @@ def test_the_compiled_ekf_restarts_where_the_reference_does():
     assert len(resets) >= 2  # both restarts happened
     np.testing.assert_array_equal(got[:, -1], ref[:, -1])  # the same count, every step
     np.testing.assert_allclose(got, ref, rtol=1e-9, atol=1e-12)
+
+
+def test_a_noise_covariance_set_after_the_first_step_reaches_the_compiled_path():
+    """R is the filter's own at every call, not a copy taken on the first."""
+    from ledsim.loop.build.estimation import identified_model
+    from ledsim.physics.gimbal_system import GimbalSystem
+    from ledsim.physics.scene import WorldConfig
+    from observer.baselines import ExtendedKalmanFilter
+
+    model = identified_model(GimbalSystem(WorldConfig()))
+    rng = np.random.default_rng(8)
+    ys = np.array([model.h(np.array([0.05, 0.0]))] * 60) + rng.normal(scale=2e-7,
+                                                                      size=(60, 2))
+    states = {}
+    for compiled in (False, True):
+        with jit.use(compiled):
+            f = ExtendedKalmanFilter(model)
+            out = []
+            for k, y in enumerate(ys):
+                if k == 20:
+                    f.R = f.R * 25.0  # five times the noise from here on
+                out.append(np.r_[f.update(y), f.P.ravel()])
+                f.predict(0.0)
+            states[compiled] = np.array(out)
+    np.testing.assert_allclose(states[True], states[False], rtol=1e-9, atol=1e-15)

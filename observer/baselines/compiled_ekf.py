@@ -19,7 +19,7 @@ from observer.supervision.compiled_pair import response_and_slope
 
 
 @njit()
-def update(mean, P, y, y_lo, y_hi, bounded, gain, offsets, response, R_diag, model_error,
+def update(mean, P, y, y_lo, y_hi, bounded, gain, offsets, response, R_model, model_error,
            noise_scale, lost_nis, lost_steps, inconsistent):
     """One measurement ``y`` [W] at the estimate ``mean`` (phi [rad], phidot [rad/s]) and
     its covariance P: returns (mean, P, the count of implausible innovations in a row,
@@ -46,7 +46,7 @@ def update(mean, P, y, y_lo, y_hi, bounded, gain, offsets, response, R_diag, mod
         H[j, 0] = gain * slope
         y_pred = gain * g
         innov[j] = y[i] - y_pred
-        r = R_diag[i]
+        r = R_model[i, i]
         if model_error != 0.0:
             r = r + (model_error * y_pred) ** 2
         if noise_scale != 1.0:

@@ -39,7 +39,8 @@ class ExtendedKalmanFilter(GaussianFilter):
                 hi = np.asarray(s.output_high if bounded else np.zeros(s.n_output), float)
                 lo, hi = (np.ascontiguousarray(np.broadcast_to(a, (s.n_output,)))
                           for a in (lo, hi))
-                numbers = (lo, hi, bounded, *s.compiled_h(), self.R.diagonal().copy(),
+                # (R is read at each call: the filter's own, as the reference's)
+                numbers = (lo, hi, bounded, *s.compiled_h(), None,
                            float(getattr(s, "model_error", 0.0)), *s.compiled_f(),
                            np.array(self._contained_box, dtype=float))
             self._numbers = numbers
@@ -50,8 +51,8 @@ class ExtendedKalmanFilter(GaussianFilter):
         c = self._compiled_numbers()
         if c is not None:
             x, P, self.inconsistent, diverged = compiled_ekf.update(
-                self.x, self.P, y, *c[:8], float(self.noise_scale), float(self.lost_nis),
-                int(self.lost_steps), int(self.inconsistent))
+                self.x, self.P, y, *c[:6], self.R, c[7], float(self.noise_scale),
+                float(self.lost_nis), int(self.lost_steps), int(self.inconsistent))
             if diverged:
                 self.reset()
             else:
