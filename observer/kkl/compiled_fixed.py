@@ -58,12 +58,13 @@ def update(z: np.ndarray, y: np.ndarray, W1T: np.ndarray, b1: np.ndarray,
 
 
 @njit()
-def predict(z: np.ndarray, y: np.ndarray, xhat: np.ndarray, u: float, u_bar: float,
+def predict(z: np.ndarray, y: np.ndarray, estimate: np.ndarray, u: float, u_bar: float,
             use_omega: bool, lam: np.ndarray, B: np.ndarray, a: np.ndarray,
             b: np.ndarray, W1T: np.ndarray, b1: np.ndarray, W2: np.ndarray,
             b2: np.ndarray, low: np.ndarray, high: np.ndarray):
     """(z' = A z + B y + Omega(z, u), f(x_hat, u) in the box): the reference's predict
-    with a scalar input; the encoder's weights ``W1T``.. (Omega only where u != u_bar)."""
+    with a scalar input, at the decoded ``estimate`` (the axis's angle [rad] and rate
+    [rad/s]); the encoder's weights ``W1T``.. (Omega only where u != u_bar)."""
     q = z.size
     z_next = np.empty(q)
     for i in range(q):
@@ -75,8 +76,9 @@ def predict(z: np.ndarray, y: np.ndarray, xhat: np.ndarray, u: float, u_bar: flo
     if use_omega and u != u_bar:
         H = b1.size
         h, bits = np.empty(H), np.empty(H, np.int64)
-        driven = np.array(axis_f(xhat[0], xhat[1], u, a, b))
-        rest = np.array(axis_f(xhat[0], xhat[1], u_bar, a, b))
+        angle, rate = estimate[0], estimate[1]  # the axis's two states
+        driven = np.array(axis_f(angle, rate, u, a, b))
+        rest = np.array(axis_f(angle, rate, u_bar, a, b))
         inside = _inside(driven, low, high)
         e_driven, e_rest = np.empty(q), np.empty(q)
         mlp(driven, W1T, b1, W2, b2, h, bits, e_driven)
