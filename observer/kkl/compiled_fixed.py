@@ -16,6 +16,7 @@ import numpy as np
 from observer.compiled_math import axis_f
 from observer.jit import njit
 from observer.kkl.compiled_maps import _hidden
+from observer.kkl.compiled_step import checks
 
 
 @njit(fastmath={"contract", "reassoc"})
@@ -50,11 +51,8 @@ def update(z: np.ndarray, y: np.ndarray, W1T: np.ndarray, b1: np.ndarray,
     H = b1.size
     xhat = np.empty(b2.size)
     mlp(z, W1T, b1, W2, b2, np.empty(H), np.empty(H, np.int64), xhat)
-    usable = True
-    for i in range(y.size):
-        if not np.isfinite(y[i]) or (bounded and not y_low[i] <= y[i] <= y_high[i]):
-            usable = False
-    return xhat, _inside(xhat, low, high), usable
+    inside, usable = checks(xhat, low, high, y, y_low, y_high, bounded)
+    return xhat, inside, usable
 
 
 @njit()
