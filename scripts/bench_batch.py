@@ -198,7 +198,9 @@ def _table(here: list[dict], there: list[dict], against: str, head: str) -> str:
                 lambda x: x["floor_us"] / x["single_us"]),
                (f"{n} seeds over mujoco.rollout", lambda x: x["batch_sps"] / x["rollout_sps"]),
                ("native vector env over SyncVectorEnv",
-                lambda x: x["native_sps"] / x["sync_sps"] if x["native_sps"] else None)]
+                lambda x: x["native_sps"] / x["sync_sps"] if x["native_sps"] else None),
+               (f"native vector env over mujoco.rollout of {n} worlds",
+                lambda x: x["native_sps"] / x["rollout_sps"] if x["native_sps"] else None)]
     for label, f in derived:
         lines.append(f"| {label} | {cell(f(t) if t['single_us'] else None, '.2f')} "
                      f"| {cell(f(h), '.2f')} |")

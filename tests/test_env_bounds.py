@@ -59,6 +59,7 @@ def test_a_short_ppo_run_stays_in_bounds():
     env = FrameStackObservation(gym.make(ENV_ID), 4)
     model = sb3.PPO("MlpPolicy", env, n_steps=512, batch_size=128, n_epochs=2, seed=0,
                     device="cpu", verbose=0)
+    model.set_logger(sb3.common.logger.Logger(None, []))  # no stray log folder in /tmp
     seen = []
 
     class Watch(sb3.common.callbacks.BaseCallback):

@@ -21,19 +21,21 @@ ENV = "ledsim/LinkAlign-v0"
 def _single_run(seed, actions, **kw):
     env = gym.make(ENV, **kw)
     obs, _ = env.reset(seed=seed)
-    out, rewards = [obs], []
+    out, rewards, infos = [obs], [], []
     for a in actions:
-        obs, r, *_ = env.step(a)
+        obs, r, _, _, info = env.step(a)
         out.append(obs)
         rewards.append(r)
+        infos.append(info)
     env.close()
-    return np.array(out), np.array(rewards)
+    return np.array(out), np.array(rewards), infos
 
 
 @pytest.mark.parametrize("kw", [
     dict(disturbances=("current:speed=0.05,gust=0.02",)),
     dict(disturbances=("vibration:frequency=3,torque=0.5",), scenario=None),
-], ids=["current", "vibration-random-start"])
+    dict(imu=False, distance=3.0),
+], ids=["current", "vibration-random-start", "no-imu"])
 @pytest.mark.parametrize("n", [1, 3])
 def test_each_sub_env_is_the_single_env_of_its_seed(kw, n):
     venv = gym.make_vec(ENV, num_envs=n, threads=2 if n > 1 else 1, **kw)
@@ -41,19 +43,24 @@ def test_each_sub_env_is_the_single_env_of_its_seed(kw, n):
     rng = np.random.default_rng(0)
     actions = rng.uniform(-1, 1, (25, n, 1)).astype(np.float32)
     obs, _ = venv.reset(seed=11)
-    seen, rewards = [obs], []
+    seen, rewards, infos = [obs], [], []
     for a in actions:
         obs, r, term, trunc, info = venv.step(a)
         assert not term.any() and not trunc.any()
         assert set(info) >= {"phi", "_phi", "power_clean", "time"}
         seen.append(obs)
         rewards.append(r)
+        infos.append(info)
     venv.close()
     seen, rewards = np.array(seen), np.array(rewards)
     for i in range(n):
-        obs_i, rew_i = _single_run(11 + i, actions[:, i], **kw)
+        obs_i, rew_i, info_i = _single_run(11 + i, actions[:, i], **kw)
         np.testing.assert_array_equal(seen[:, i], obs_i, err_msg=f"sub-env {i}")
         np.testing.assert_array_equal(rewards[:, i], rew_i, err_msg=f"sub-env {i}")
+        for key in ("phi", "phidot", "power_clean", "time"):
+            np.testing.assert_array_equal([info[key][i] for info in infos],
+                                          [info[key] for info in info_i],
+                                          err_msg=f"sub-env {i}: info {key!r}")
 
 
 def test_next_step_autoreset_resets_the_step_after_the_episode_ends():
@@ -104,6 +111,8 @@ def test_actions_of_the_wrong_shape_are_refused():
     venv.reset(seed=0)
     with pytest.raises(ValueError, match="one row per sub-environment"):
         venv.step(np.zeros((3, 1)))
+    with pytest.raises(ValueError, match="not allowed: one finite number"):
+        venv.step(np.array([[0.1], [np.nan]]))  # the batch's check hands it to the env
     venv.close()
 
 
@@ -116,6 +125,7 @@ def test_sync_and_async_stay_available():
 def test_stable_baselines3_trains_ppo_through_the_adapter():
     pytest.importorskip("stable_baselines3")
     from stable_baselines3 import PPO
+    from stable_baselines3.common.logger import Logger
     from stable_baselines3.common.vec_env import VecFrameStack
 
     from ledsim.envs.sb3 import VectorEnvForSB3, make_sb3_vec_env
@@ -125,6 +135,7 @@ def test_stable_baselines3_trains_ppo_through_the_adapter():
     venv = make_sb3_vec_env(ENV, num_envs=4, scenario=None, max_episode_steps=50)
     model = PPO("MlpPolicy", VecFrameStack(venv, 2), n_steps=32, batch_size=64, seed=0,
                 device="cpu")
+    model.set_logger(Logger(None, []))  # no stray log folder in /tmp
     model.learn(256)
     obs = venv.reset()
     for k in range(50):

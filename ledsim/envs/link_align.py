@@ -243,10 +243,18 @@ class LinkAlignEnv(gym.Env, EzPickle):
             raise ValueError(f"action {action!r} is not allowed: "
                              + ("one finite number" if n == 1 else f"{n} finite numbers")
                              + " in [-1, 1]")
-        self.k += 1
         if n > 1:  # one duty per axis
+            self.k += 1
             return self.world.set_torques(np.clip(a, -1.0, 1.0) * self.torque_limit)
-        return self.world.set_torque(min(max(float(a[0]), -1.0), 1.0) * self.torque_limit)
+        return self.command_duty(float(a[0]))
+
+    def command_duty(self, duty: float) -> float:
+        """:meth:`command` of a checked, finite duty [-] of the one axis (the vector env
+        checks its whole batch of actions at once)."""
+        if self.sensor is None:
+            raise RuntimeError("call reset() before step()")
+        self.k += 1
+        return self.world.set_torque(min(max(duty, -1.0), 1.0) * self.torque_limit)
 
     def observe_step(self, reading=None):
         """After the next control step was prepared (its vehicle acted): observe (the

@@ -28,6 +28,7 @@ from gymnasium.vector import AutoresetMode, VectorEnv
 from gymnasium.vector.utils import batch_space
 
 from ledsim.envs.link_align import LinkAlignEnv
+from ledsim.envs.observe_rows import observe_rows
 from ledsim.physics.world_rows import WorldRows
 
 #: The autoreset modes by name (the enum's values are spelt too: ``"NextStep"``).
@@ -137,8 +138,12 @@ class LinkAlignVectorEnv(VectorEnv):
         envs, n = self.envs, self.num_envs
         stepping = ~self._ended if self.mode == AutoresetMode.NEXT_STEP else \
             np.ones(n, dtype=bool)
-        for i in np.flatnonzero(stepping):
-            envs[i].command(actions[i])
+        duties = self._duties(actions)
+        for i in np.flatnonzero(stepping).tolist():
+            if duties is None:
+                envs[i].command(actions[i])
+            else:
+                envs[i].command_duty(duties[i])
         # Every vehicle row steps (a resetting one is put back below).
         self._rows.tick(np.array([e.k * e.dt for e in envs]), stepping)
         obs, infos = [None] * n, [None] * n
@@ -147,6 +152,9 @@ class LinkAlignVectorEnv(VectorEnv):
         # Every world's sensor in one pass (a world about to reset reads its old sensor,
         # which the reset replaces with a fresh one).
         readings = self._rows.read()
+        terminated = np.zeros(n, dtype=bool)
+        if stepping.all():  # every row observed and rewarded at once
+            return self._observed(readings, terminated)
         for i in range(n):
             if stepping[i]:
                 obs[i], reward[i], _, _, infos[i] = envs[i].observe_step(readings[i])
@@ -155,10 +163,39 @@ class LinkAlignVectorEnv(VectorEnv):
                     self._elapsed[i] >= self.max_episode_steps
             else:  # next-step autoreset of an episode that ended last step
                 obs[i], infos[i] = self._reset_one(i)
-        terminated = np.zeros(n, dtype=bool)
         if self.mode == AutoresetMode.NEXT_STEP:
             self._ended = truncated.copy()
             return self._stack_obs(obs), reward, terminated, truncated, self._stack_info(infos)
+        return self._same_step_resets(obs, reward, terminated, truncated, infos)
+
+    def _duties(self, actions: np.ndarray) -> list[float] | None:
+        """Every row's duty of a one-axis env's ``actions`` (N, 1) when all are finite
+        (checked at once; None: let each env check its own and name the bad one)."""
+        if self.single_action_space.shape != (1,) or actions.shape != (self.num_envs, 1):
+            return None
+        duties = actions.astype(float, copy=False).reshape(-1)
+        return duties.tolist() if np.isfinite(duties).all() else None
+
+    def _observed(self, readings, terminated):
+        """:meth:`step`'s return when every row stepped (no next-step reset due): the
+        rows observed and rewarded together (:func:`~ledsim.envs.observe_rows.observe_rows`)."""
+        obs, reward, info = observe_rows(self.envs, readings, self._rows.vehicles)
+        self._elapsed += 1
+        truncated = np.zeros(self.num_envs, dtype=bool) if self.max_episode_steps is None \
+            else self._elapsed >= self.max_episode_steps
+        if self.mode == AutoresetMode.NEXT_STEP:
+            self._ended = truncated.copy()
+        if self.mode == AutoresetMode.NEXT_STEP or not truncated.any():
+            masks = {f"_{k}": np.ones(self.num_envs, dtype=bool) for k in info}
+            return obs, reward, terminated, truncated, {**info, **masks}
+        rows = [{k: v[i].copy() if v.ndim > 1 else v[i].item() for k, v in info.items()}
+                for i in range(self.num_envs)]
+        return self._same_step_resets(list(obs), reward, terminated, truncated, rows)
+
+    def _same_step_resets(self, obs, reward, terminated, truncated, infos):
+        """:meth:`step`'s return in same-step mode: each truncated row reset now, its
+        last observation and info in ``final_obs`` and ``final_info``."""
+        n = self.num_envs
         final = np.flatnonzero(truncated)
         info = {}
         if final.size:  # same-step: the new episode's first observation, the old's last

@@ -53,6 +53,12 @@ SEED_OFFSET = 20_000
 GRAVITY_REACTION = np.array([0.0, 0.0, GRAVITY])
 
 
+def _due(k: int, Te: float, rate: float) -> bool:
+    """A measurement at ``rate`` [Hz] falls in control step ``k`` of period ``Te`` [s]
+    (step 0 included)."""
+    return k == 0 or math.floor(k * Te * rate + 1e-9) > math.floor((k - 1) * Te * rate + 1e-9)
+
+
 class NavigationSensor(Rows):
     """The vehicle's sensors of ``world``, read once per control step ``Te`` [s].
 
@@ -130,13 +136,6 @@ class NavigationSensor(Rows):
         """Fixes made outliers so far (per vehicle for N)."""
         return int(self._outliers[0]) if self.single else self._outliers
 
-    def _due(self, rate: float) -> np.ndarray:
-        """A measurement at ``rate`` [Hz] falls in this control step (step 0 included),
-        per vehicle."""
-        return np.array([k == 0 or math.floor(k * self.Te * rate + 1e-9)
-                         > math.floor((k - 1) * self.Te * rate + 1e-9)
-                         for k in self.k.tolist()])
-
     def read(self) -> NavigationReading:
         """The readings of this control step (the world's current state)."""
         r = self.read_rows()
@@ -148,14 +147,17 @@ class NavigationSensor(Rows):
         none arrived; ``magnetometer``: None when none was read)."""
         n, Te, N = self.noise, self.Te, self.n
         truths = [w.vehicle_motion() for w in self.worlds]
-        lock = np.array([w.dvl_bottom_lock for w in self.worlds])
-        fresh = (self._due(n.dvl_rate) & lock) | ~self._has_dvl
-        fix_due = self._due(n.fix_rate)
-        mag_due = self._due(n.magnetometer_rate) & (truths[0].magnetometer is not None)
+        lock = [w.dvl_bottom_lock for w in self.worlds]
+        has_mag = truths[0].magnetometer is not None
+        # Per vehicle, as plain bools (numpy's calls would cost more than the logic).
+        fresh, fix_due, mag_due = [], [], []
+        for k, locked, had in zip(self.k.tolist(), lock, self._has_dvl.tolist(), strict=True):
+            fresh.append((_due(k, Te, n.dvl_rate) and locked) or not had)
+            fix_due.append(_due(k, Te, n.fix_rate))
+            mag_due.append(_due(k, Te, n.magnetometer_rate) and has_mag)
         # Each vehicle's draws in one call, in the order a reading has always taken them.
         draws = [rng.standard_normal(18 + 3 * f + 3 * x + 1 + 3 * m) for rng, f, x, m in
-                 zip(self.rngs, fresh.tolist(), fix_due.tolist(), mag_due.tolist(),
-                     strict=True)]
+                 zip(self.rngs, fresh, fix_due, mag_due, strict=True)]
         attitude = np.array([w.hull_rotation for w in self.worlds])
         velocity = np.array([w.hull_velocity()[3:] for w in self.worlds])
         true = np.array([(t.gyro, t.accel) for t in truths])
@@ -182,14 +184,9 @@ class NavigationSensor(Rows):
             self.gyro_bias = self._decay[0] * self.gyro_bias + noise[:, 4]
             self.accel_bias = self._decay[1] * self.accel_bias + noise[:, 5]
         self._attitude, self._velocity = attitude, velocity
-        fix, fix_time, fix_std = np.empty((N, 3)), np.empty(N), np.empty(N)
-        for a in (fix, fix_time, fix_std):
-            a.fill(np.nan)
+        fix, fix_time, fix_std = np.full((N, 3), np.nan), np.full(N, np.nan), np.full(N, np.nan)
         depth = np.empty(N)
-        mag = None
-        if mag_due.any():
-            mag = np.empty((N, 3))
-            mag.fill(np.nan)
+        mag = np.full((N, 3), np.nan) if any(mag_due) else None
         for i, (t, d) in enumerate(zip(truths, draws, strict=True)):
             at = 18
             if fresh[i]:
@@ -209,9 +206,10 @@ class NavigationSensor(Rows):
         step = n.encoder_step
         encoder = np.array([step * math.floor(t.encoder / step + 0.5) for t in truths])
         self.k = self.k + 1
+        lock = np.array(lock, dtype=bool)
         return NavigationReading(gyro, accel, self._dvl.copy(), encoder, fix, depth,
-                                 fresh & lock, self._dvl_gyro.copy(), delta, dv, lock, mag,
-                                 fix_time, fix_std)
+                                 np.array(fresh, dtype=bool) & lock, self._dvl_gyro.copy(),
+                                 delta, dv, lock, mag, fix_time, fix_std)
 
     def _measure_fix(self, i: int, position: np.ndarray, white: np.ndarray) -> None:
         """A fix of vehicle ``i``'s ``position`` [m] measured now: its error grows with
