@@ -63,6 +63,21 @@ def test_each_sub_env_is_the_single_env_of_its_seed(kw, n):
                                           err_msg=f"sub-env {i}: info {key!r}")
 
 
+def test_the_rows_reward_is_the_single_envs_to_the_bit():
+    """The reward's achievable power over rows against the single env's, one at a time,
+    at random distances and LED angles (numpy's scalars and arrays round differently)."""
+    from ledsim.envs.observe_rows import _achievable
+    from ledsim.radiometry.optics import achievable_power
+
+    env = gym.make(ENV).unwrapped
+    c, peak = env.system.constants, env.peak_response
+    rng = np.random.default_rng(3)
+    d, theta = rng.uniform(0.05, 40.0, 4000), rng.uniform(-2.0, 2.0, 4000)
+    one = [float(achievable_power(di, ti, c, peak)) for di, ti in zip(d, theta, strict=True)]
+    np.testing.assert_array_equal(_achievable(d, theta, c, peak), one)
+    env.close()
+
+
 def test_next_step_autoreset_resets_the_step_after_the_episode_ends():
     venv = gym.make_vec(ENV, num_envs=2, max_episode_steps=3)
     assert venv.metadata["autoreset_mode"] == AutoresetMode.NEXT_STEP

@@ -4,10 +4,10 @@
 and rewarding each one through :meth:`LinkAlignEnv.observe_step
 <ledsim.envs.link_align.LinkAlignEnv.observe_step>` costs numpy's per-call overhead N
 times a step (a dozen small calls each). Here the same operations run over the N rows:
-elementwise IEEE arithmetic and numpy's own ``exp`` and ``cos``, which give each
-element the bits they give it alone, and libm's ``pow`` and ``remainder`` per element,
-which numpy's scalars and ``math.remainder`` call in the single env (numpy's array
-``power`` and ``square`` differ from them in the last bit). ``tests/test_vector_env.py`` holds every
+elementwise IEEE arithmetic and numpy's own ``exp``, ``cos`` and square, which give
+each element the bits they give it alone, and libm's ``pow`` and ``remainder`` per
+element where the single env calls them on a numpy scalar or a float (numpy's array
+``power`` differs from libm's in the last bit). ``tests/test_vector_env.py`` holds every
 row to the single env's bits.
 """
 
@@ -19,7 +19,7 @@ import numpy as np
 
 from ledsim.constants import LinkConstants
 from ledsim.physics.sensor import SensorReading
-from observer.navigation.rotations import libm_square, per_element
+from observer.navigation.rotations import per_element
 
 
 def observe_rows(envs, readings: list[SensorReading], vehicles) -> tuple:
@@ -61,9 +61,9 @@ def observe_rows(envs, readings: list[SensorReading], vehicles) -> tuple:
 def _achievable(distance, emission, c: LinkConstants, peak_response: float) -> np.ndarray:
     """:func:`~ledsim.radiometry.optics.achievable_power` [W] of N distances [m] and
     emission angles [rad], each as the single env computes it from one numpy scalar:
-    numpy's ``exp`` and ``cos``, libm's ``pow`` for the Lambertian power and the
-    square."""
+    there the distance is a 0-d array (numpy's ``exp`` and square, which its arrays
+    share) and the cosine a numpy scalar, whose power is libm's ``pow``."""
     cos_t = np.maximum(np.cos(emission), 0.0)
     intensity = per_element(math.pow, cos_t, float(c.lambertian_order))
-    return c.power_scale * np.exp(-c.attenuation * distance) / libm_square(distance) \
+    return c.power_scale * np.exp(-c.attenuation * distance) / distance**2 \
         * intensity * peak_response
