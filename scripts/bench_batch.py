@@ -13,7 +13,8 @@ the ratios are of medians measured in the same rounds. The rows:
   with the torques the loop applied, on one thread;
 * **vector envs of 64 worlds** (``ledsim/LinkAlign-v0``, zero actions): Gymnasium's
   ``SyncVectorEnv`` and ``AsyncVectorEnv`` and, where the tree has it, the native one
-  (``gym.make_vec``'s ``vector_entry_point``), steps per second.
+  (``gym.make_vec``'s ``vector_entry_point``), steps per second; and the native one
+  over ``mujoco.rollout`` stepping its own worlds, interleaved in one process.
 
     python scripts/bench_batch.py [--against 724fd71] [--rounds 3] [--quick]
                                   [--out docs/bench_batch.md] [--json PATH]
@@ -37,7 +38,7 @@ ROOT = Path(__file__).resolve().parent.parent
 ONE_THREAD = {k: "1" for k in ("OMP_NUM_THREADS", "OPENBLAS_NUM_THREADS", "MKL_NUM_THREADS",
                                "NUMEXPR_NUM_THREADS", "VECLIB_MAXIMUM_THREADS")}
 FIGURES = ("single_us", "floor_us", "batch_sps", "rollout_sps", "sync_sps", "async_sps",
-           "native_sps")
+           "native_sps", "native_over_rollout")
 
 
 def measure(quick: bool) -> dict:
@@ -59,8 +60,52 @@ def measure(quick: bool) -> dict:
     n = 16 if quick else 64
     out["batch_sps"], out["rollout_sps"] = batch_against_rollout(n, 0.3 if quick else 1.0)
     out.update(_envs(n, 20 if quick else 60))
+    if out.get("native_sps"):
+        out["native_over_rollout"] = native_against_rollout(n, 20 if quick else 50,
+                                                            3 if quick else 7)
     out["worlds"] = n
     return out
+
+
+def native_against_rollout(n: int, steps: int, rounds: int) -> float:
+    """The native vector env's steps / s over ``mujoco.rollout``'s on the same ``n``
+    worlds, interleaved: each round times ``steps`` env steps (zero actions), then
+    rollout stepping the env's worlds as they are for as many control periods (their
+    controls held); the median of the rounds' ratios. Interleaving in one process
+    keeps a slow spell of the machine out of the ratio."""
+    import gymnasium as gym
+    import mujoco
+    import numpy as np
+    from mujoco import rollout
+
+    import ledsim.envs  # noqa: F401
+
+    venv = gym.make_vec("ledsim/LinkAlign-v0", num_envs=n,
+                        vectorization_mode="vector_entry_point")
+    venv.reset(seed=0)
+    a = np.zeros((n, 1), np.float32)
+    venv.step(a)
+    worlds = [e.world for e in venv.unwrapped.envs]
+    m, sub = worlds[0].model, worlds[0].config.substeps
+    full = mujoco.mjtState.mjSTATE_FULLPHYSICS
+    ratios = []
+    with rollout.Rollout(nthread=0) as r:
+        data = [mujoco.MjData(m)]
+        for _ in range(rounds):
+            t0 = time.perf_counter()
+            for _ in range(steps):
+                venv.step(a)
+            env_sps = n * steps / (time.perf_counter() - t0)
+            x0 = np.zeros((n, mujoco.mj_stateSize(m, full)))
+            for i, w in enumerate(worlds):
+                mujoco.mj_getState(w.model, w.data, x0[i], full)
+            ctrl = np.repeat(np.stack([w.data.ctrl.copy() for w in worlds])[:, None, :],
+                             steps * sub, axis=1)
+            t0 = time.perf_counter()
+            r.rollout([m] * n, data, x0, ctrl)
+            ratios.append(env_sps / (n * steps / (time.perf_counter() - t0)))
+    venv.close()
+    return statistics.median(ratios)
 
 
 def floor_us(world, seconds: float) -> float:
@@ -200,7 +245,9 @@ def _table(here: list[dict], there: list[dict], against: str, head: str) -> str:
                ("native vector env over SyncVectorEnv",
                 lambda x: x["native_sps"] / x["sync_sps"] if x["native_sps"] else None),
                (f"native vector env over mujoco.rollout of {n} worlds",
-                lambda x: x["native_sps"] / x["rollout_sps"] if x["native_sps"] else None)]
+                lambda x: x["native_sps"] / x["rollout_sps"] if x["native_sps"] else None),
+               ("the same, interleaved in one process (median of the rounds' ratios)",
+                lambda x: x.get("native_over_rollout"))]
     for label, f in derived:
         lines.append(f"| {label} | {cell(f(t) if t['single_us'] else None, '.2f')} "
                      f"| {cell(f(h), '.2f')} |")

@@ -66,6 +66,23 @@ def test_the_thrusters_clip_as_numpy_does():
         assert world.thrust.tobytes() == ref.tobytes()
 
 
+def test_the_thrusters_of_many_worlds_are_each_worlds_own():
+    from ledsim.physics.hull import set_thrust_rows
+
+    worlds = [run.world for run in
+              ClosedLoop(RunConfig(scenario="align", seconds=0.1), range(3)).runs]
+    _, lo, hi = worlds[0]._thruster_range()
+    rng = np.random.default_rng(4)
+    for _ in range(200):
+        command = rng.normal(size=(3, 5)) * 3 * np.abs(hi)
+        command[rng.integers(3), rng.integers(5)] = rng.choice(SPECIALS)
+        got = set_thrust_rows(worlds, command)
+        for w, row, applied in zip(worlds, command, got, strict=True):
+            ref = np.clip(row, lo, hi)
+            assert applied.tobytes() == ref.tobytes()
+            assert w.thrust.tobytes() == ref.tobytes()
+
+
 @pytest.mark.parametrize("kind", ["identified", "axis"])
 def test_the_load_observers_rate_step_is_the_models(kind):
     if kind == "axis":

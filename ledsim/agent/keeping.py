@@ -18,6 +18,7 @@ import numpy as np
 
 from ledsim.constants import ConfigError, NavigationNoise
 from ledsim.errors import check_ranges
+from ledsim.physics.hull import set_thrust_rows
 from ledsim.physics.world import LinkWorld
 from observer import jit
 from observer.navigation.hull_loads import HullLoadObserver, soft_deadband
@@ -163,8 +164,7 @@ class StationKeeper(Rows):
             measured = self._mass * np.concatenate([a, alpha[:, 1:]], axis=1) - self.thrust
             load = self.loads.update_rows(measured)
             command = self._pd(nav, P, velocity, omega) - load
-        self.thrust = np.array([w.set_thrust(c) for w, c in zip(self.worlds, command,
-                                                                strict=True)])
+        self.thrust = set_thrust_rows(self.worlds, command)
         self._omega = omega
         self.k = self.k + 1
         return self.thrust

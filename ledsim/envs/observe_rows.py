@@ -26,10 +26,12 @@ def observe_rows(envs, readings: list[SensorReading], vehicles) -> tuple:
     """(obs (N, n_obs), reward (N,), info of arrays (N, ...)) of ``envs`` (N
     :class:`~ledsim.envs.link_align.LinkAlignEnv` of one configuration, each with its
     vehicle a row of the stacked ``vehicles``, or None without the IMU) from their
-    sensors' ``readings``; each env's :attr:`reading` is set, as its own
-    :meth:`observe_step` sets it. Row i is what ``envs[i].observe_step(readings[i])``
-    returns, to the last bit."""
+    sensors' ``readings`` (None: the env reads its own now); each env's
+    :attr:`reading` is set, as its own :meth:`observe_step` sets it. Row i is what
+    ``envs[i].observe_step(readings[i])`` returns, to the last bit."""
     e0 = envs[0]
+    readings = [e.sensor.read() if r is None else r  # None: the env reads its own
+                for e, r in zip(envs, readings, strict=True)]
     c = e0.system.constants
     ref = c.layout.reference
     power = np.array([r.power for r in readings], dtype=np.float64)

@@ -76,12 +76,21 @@ class HullAccess:
     def _thruster_range(self) -> tuple[list, list, list]:
         """(actuator ids, lower limits, upper limits) of the thrusters (the model's
         ``ctrlrange``, read once), as lists."""
+        return self._thruster_cache()[:3]
+
+    def _thruster_cache(self) -> tuple:
+        """:meth:`_thruster_range`, then the ids as a slice where they are consecutive
+        (else the list) and the limits as arrays: what :func:`set_thrust_rows` takes."""
         cached = getattr(self, "_thrusters_cached", None)
-        if cached is None or cached[3] is not self.model:
+        if cached is None or cached[-1] is not self.model:
             ids = np.array(self.ids.thrusters)
             lo, hi = self.model.actuator_ctrlrange[ids].T.tolist()
-            cached = self._thrusters_cached = (ids.tolist(), lo, hi, self.model)
-        return cached[:3]
+            ids = ids.tolist()
+            run = ids == list(range(ids[0], ids[0] + len(ids)))
+            where = slice(ids[0], ids[0] + len(ids)) if run else ids
+            cached = self._thrusters_cached = (ids, lo, hi, where, np.array(lo),
+                                               np.array(hi), self.model)
+        return cached
 
     def thrust_limits(self) -> np.ndarray:
         """The thrusters' limits: surge, sway, heave [N], pitch and yaw [N m] (their
@@ -151,3 +160,47 @@ class HullAccess:
         mujoco.mj_fullM(self.model, self.data, M)
         dof = self.model.jnt_dofadr[self.model.body_jntadr[self.ids.hull_body]]
         return np.diag(M)[[dof, dof + 1, dof + 2, dof + 4, dof + 5]].copy()
+
+
+def set_thrust_rows(worlds, command: np.ndarray) -> np.ndarray:
+    """:meth:`HullAccess.set_thrust` of every world: row i of ``command`` (N, 5) [N, N m]
+    to ``worlds[i]``, clipped at its thrusters' limits, all rows at once (its values:
+    a NaN kept, each limit where a command passes it). Returns what was applied,
+    (N, 5)."""
+    if len(worlds) == 1:  # plain floats beat numpy's calls for one
+        return worlds[0].set_thrust(command[0])[None]
+    cached = [w._thruster_cache() for w in worlds]
+    lo = np.array([c[4] for c in cached])
+    hi = np.array([c[5] for c in cached])
+    x = np.asarray(command, dtype=float)
+    applied = np.where(x < lo, lo, np.where(x > hi, hi, x))
+    for w, c, row in zip(worlds, cached, applied, strict=True):
+        w.data.ctrl[c[3]] = row
+    return applied
+
+
+def vehicle_motion_rows(worlds) -> tuple[VehicleMotion, np.ndarray, np.ndarray]:
+    """:meth:`HullAccess.vehicle_motion` of every world (of one scene layout) as one
+    :class:`VehicleMotion` of arrays with a leading axis of N (``encoder`` (N,)), and
+    the hulls' rotations (N, 3, 3) and linear velocities in the world frame (N, 3)
+    [m/s] (:attr:`HullAccess.hull_rotation`, :meth:`HullAccess.hull_velocity`'s): each
+    world's values, copied once per world instead of once per field."""
+    w0 = worlds[0]
+    (g, a, v, e, p), mag, hull = w0.ids.vehicle_sensors, w0.ids.magnetometer, w0.ids.hull_body
+    n = len(worlds)
+    sensed = np.empty((n, w0.model.nsensordata))
+    rotation = np.empty((n, 9))
+    velocity = np.empty((n, 6))
+    body = mujoco.mjtObj.mjOBJ_BODY
+    for i, w in enumerate(worlds):
+        m, d = w.model, w.data
+        mujoco.mj_sensorPos(m, d)  # writes sensordata only: the dynamics are untouched
+        mujoco.mj_sensorVel(m, d)
+        sensed[i] = d.sensordata
+        rotation[i] = d.xmat[hull]
+        mujoco.mj_objectVelocity(m, d, body, hull, velocity[i], 0)
+    motion = VehicleMotion(sensed[:, g:g + 3].copy(), sensed[:, a:a + 3].copy(),
+                           sensed[:, v:v + 3].copy(), sensed[:, e].copy(),
+                           sensed[:, p:p + 3].copy(),
+                           None if mag is None else sensed[:, mag:mag + 3].copy())
+    return motion, rotation.reshape(n, 3, 3), velocity[:, 3:].copy()

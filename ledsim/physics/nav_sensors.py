@@ -39,6 +39,7 @@ from collections import deque
 import numpy as np
 
 from ledsim.constants import GRAVITY, NavigationNoise
+from ledsim.physics.hull import vehicle_motion_rows
 from ledsim.physics.nav_reading import NavigationReading, SensorBiases
 from ledsim.physics.world import LinkWorld, WorldError
 from observer import jit
@@ -146,25 +147,26 @@ class NavigationSensor(Rows):
         axis of N on each field (``position_fix``, ``fix_time``, ``fix_std``: NaN where
         none arrived; ``magnetometer``: None when none was read)."""
         n, Te, N = self.noise, self.Te, self.n
-        truths = [w.vehicle_motion() for w in self.worlds]
+        truth, attitude, velocity = vehicle_motion_rows(self.worlds)
         lock = [w.dvl_bottom_lock for w in self.worlds]
-        has_mag = truths[0].magnetometer is not None
+        has_mag = truth.magnetometer is not None
         # Per vehicle, as plain bools (numpy's calls would cost more than the logic).
-        fresh, fix_due, mag_due = [], [], []
+        fresh, fix_due, mag_due, dues = [], [], [], {}  # dues: per step count (mostly one)
         for k, locked, had in zip(self.k.tolist(), lock, self._has_dvl.tolist(), strict=True):
-            fresh.append((_due(k, Te, n.dvl_rate) and locked) or not had)
-            fix_due.append(_due(k, Te, n.fix_rate))
-            mag_due.append(_due(k, Te, n.magnetometer_rate) and has_mag)
+            due = dues.get(k)
+            if due is None:
+                due = dues[k] = (_due(k, Te, n.dvl_rate), _due(k, Te, n.fix_rate),
+                                 _due(k, Te, n.magnetometer_rate) and has_mag)
+            fresh.append((due[0] and locked) or not had)
+            fix_due.append(due[1])
+            mag_due.append(due[2])
         # Each vehicle's draws in one call, in the order a reading has always taken them.
         draws = [rng.standard_normal(18 + 3 * f + 3 * x + 1 + 3 * m) for rng, f, x, m in
                  zip(self.rngs, fresh, fix_due, mag_due, strict=True)]
-        attitude = np.array([w.hull_rotation for w in self.worlds])
-        velocity = np.array([w.hull_velocity()[3:] for w in self.worlds])
-        true = np.array([(t.gyro, t.accel) for t in truths])
         self._biases = SensorBiases(self.gyro_bias, self.accel_bias)  # replaced below
         if jit.enabled():
             gyro, delta, dv, accel, self.gyro_bias, self.accel_bias = compiled_nav.imu(
-                true[:, 0], true[:, 1], attitude, self._attitude, velocity, self._velocity,
+                truth.gyro, truth.accel, attitude, self._attitude, velocity, self._velocity,
                 np.array([d[:18] for d in draws]), self._scale_rows, self.gyro_bias,
                 self.accel_bias, self._decay[0], self._decay[1], Te, GRAVITY_REACTION)
         else:
@@ -173,13 +175,13 @@ class NavigationSensor(Rows):
             # drifts.
             noise = (np.array([d[:18] for d in draws]).reshape(N, 6, 3) * self._scale[0]) \
                 * self._scale[1]
-            gyro = true[:, 0] + self.gyro_bias + noise[:, 0]
+            gyro = truth.gyro + self.gyro_bias + noise[:, 0]
             delta = rotation_log(self._attitude.swapaxes(1, 2) @ attitude) \
                 + Te * self.gyro_bias + noise[:, 1]
             dv = (attitude.swapaxes(1, 2) @ (velocity - self._velocity
                                              + Te * GRAVITY_REACTION)[..., None])[..., 0] \
                 + Te * self.accel_bias + noise[:, 2]
-            accel = true[:, 1] + self.accel_bias + noise[:, 3]
+            accel = truth.accel + self.accel_bias + noise[:, 3]
             # Gauss-Markov biases of stationary spread the bias instability.
             self.gyro_bias = self._decay[0] * self.gyro_bias + noise[:, 4]
             self.accel_bias = self._decay[1] * self.accel_bias + noise[:, 5]
@@ -187,24 +189,24 @@ class NavigationSensor(Rows):
         fix, fix_time, fix_std = np.full((N, 3), np.nan), np.full(N, np.nan), np.full(N, np.nan)
         depth = np.empty(N)
         mag = np.full((N, 3), np.nan) if any(mag_due) else None
-        for i, (t, d) in enumerate(zip(truths, draws, strict=True)):
+        for i, d in enumerate(draws):
             at = 18
             if fresh[i]:
-                self._dvl[i] = t.dvl + d[at:at + 3] * n.dvl_noise
+                self._dvl[i] = truth.dvl[i] + d[at:at + 3] * n.dvl_noise
                 self._dvl_gyro[i] = gyro[i]
                 self._has_dvl[i] = True
                 at += 3
             if fix_due[i]:
-                self._measure_fix(i, t.position, d[at:at + 3])
+                self._measure_fix(i, truth.position[i], d[at:at + 3])
                 at += 3
             got = self._arrived(i)
             if got[0] is not None:
                 fix[i], fix_time[i], fix_std[i] = got
-            depth[i] = self.surface[i] - t.position[2] + d[at] * n.depth_noise
+            depth[i] = self.surface[i] - truth.position[i, 2] + d[at] * n.depth_noise
             if mag_due[i]:
-                mag[i] = t.magnetometer + d[at + 1:at + 4] * n.magnetometer_noise
+                mag[i] = truth.magnetometer[i] + d[at + 1:at + 4] * n.magnetometer_noise
         step = n.encoder_step
-        encoder = np.array([step * math.floor(t.encoder / step + 0.5) for t in truths])
+        encoder = np.array([step * math.floor(e / step + 0.5) for e in truth.encoder.tolist()])
         self.k = self.k + 1
         lock = np.array(lock, dtype=bool)
         return NavigationReading(gyro, accel, self._dvl.copy(), encoder, fix, depth,
