@@ -88,7 +88,9 @@ def test_next_step_autoreset_resets_the_step_after_the_episode_ends():
         assert not trunc.any()
     _, _, _, trunc, info = venv.step(a)
     assert trunc.all()
+    keys = list(info)
     obs, reward, term, trunc, info = venv.step(a)  # the reset step
+    assert list(info) == keys  # each key then its mask, whichever path stacked them
     assert not trunc.any() and not term.any() and (reward == 0).all()
     assert (info["time"] == 0).all()  # a new episode's first observation
     _, _, _, trunc, info = venv.step(a)
@@ -126,8 +128,10 @@ def test_actions_of_the_wrong_shape_are_refused():
     venv.reset(seed=0)
     with pytest.raises(ValueError, match="one row per sub-environment"):
         venv.step(np.zeros((3, 1)))
+    k = [e.k for e in venv.envs]
     with pytest.raises(ValueError, match="not allowed: one finite number"):
         venv.step(np.array([[0.1], [np.nan]]))  # the batch's check hands it to the env
+    assert [e.k for e in venv.envs] == k  # refused before any env was commanded
     venv.close()
 
 

@@ -235,6 +235,16 @@ class LinkAlignEnv(gym.Env, EzPickle):
     def command(self, action) -> float:
         """Check ``action`` and command its torque [N m] (the physics not yet stepped);
         returns the torque applied after the motor's limit."""
+        a = self.check_action(action)
+        n = a.size
+        if n > 1:  # one duty per axis
+            self.k += 1
+            return self.world.set_torques(np.clip(a, -1.0, 1.0) * self.torque_limit)
+        return self.command_duty(float(a[0]))
+
+    def check_action(self, action) -> np.ndarray:
+        """``action`` as the duties [-] it commands, (n_axes,), or a one-line error
+        naming it (and a RuntimeError before :meth:`reset`)."""
         if self.sensor is None:
             raise RuntimeError("call reset() before step()")
         a = np.asarray(action, dtype=float).reshape(-1)
@@ -243,10 +253,7 @@ class LinkAlignEnv(gym.Env, EzPickle):
             raise ValueError(f"action {action!r} is not allowed: "
                              + ("one finite number" if n == 1 else f"{n} finite numbers")
                              + " in [-1, 1]")
-        if n > 1:  # one duty per axis
-            self.k += 1
-            return self.world.set_torques(np.clip(a, -1.0, 1.0) * self.torque_limit)
-        return self.command_duty(float(a[0]))
+        return a
 
     def command_duty(self, duty: float) -> float:
         """:meth:`command` of a checked, finite duty [-] of the one axis (the vector env

@@ -25,7 +25,7 @@ from observer.navigation.rotations import per_element
 def observe_rows(envs, readings: list[SensorReading], vehicles) -> tuple:
     """(obs (N, n_obs), reward (N,), info of arrays (N, ...)) of ``envs`` (N
     :class:`~ledsim.envs.link_align.LinkAlignEnv` of one configuration, each with its
-    vehicle a row of the stacked ``vehicles``, or None without the IMU) from their
+    vehicle a row of the stacked ``vehicles``; read only with the IMU) from their
     sensors' ``readings`` (None: the env reads its own now); each env's
     :attr:`reading` is set, as its own :meth:`observe_step` sets it. Row i is what
     ``envs[i].observe_step(readings[i])`` returns, to the last bit."""

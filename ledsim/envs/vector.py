@@ -139,6 +139,9 @@ class LinkAlignVectorEnv(VectorEnv):
         stepping = ~self._ended if self.mode == AutoresetMode.NEXT_STEP else \
             np.ones(n, dtype=bool)
         duties = self._duties(actions)
+        if duties is None:  # a bad action is refused before any env is commanded
+            for i in np.flatnonzero(stepping).tolist():
+                envs[i].check_action(actions[i])
         for i in np.flatnonzero(stepping).tolist():
             if duties is None:
                 envs[i].command(actions[i])
@@ -186,8 +189,10 @@ class LinkAlignVectorEnv(VectorEnv):
         if self.mode == AutoresetMode.NEXT_STEP:
             self._ended = truncated.copy()
         if self.mode == AutoresetMode.NEXT_STEP or not truncated.any():
-            masks = {f"_{k}": np.ones(self.num_envs, dtype=bool) for k in info}
-            return obs, reward, terminated, truncated, {**info, **masks}
+            stacked = {}  # each key then its mask, in _stack_info's (Gymnasium's) order
+            for key, value in info.items():
+                stacked[key], stacked[f"_{key}"] = value, np.ones(self.num_envs, dtype=bool)
+            return obs, reward, terminated, truncated, stacked
         rows = [{k: v[i].copy() if v.ndim > 1 else v[i].item() for k, v in info.items()}
                 for i in range(self.num_envs)]
         return self._same_step_resets(list(obs), reward, terminated, truncated, rows)

@@ -186,7 +186,13 @@ def vehicle_motion_rows(worlds) -> tuple[VehicleMotion, np.ndarray, np.ndarray]:
     [m/s] (:attr:`HullAccess.hull_rotation`, :meth:`HullAccess.hull_velocity`'s): each
     world's values, copied once per world instead of once per field."""
     w0 = worlds[0]
-    (g, a, v, e, p), mag, hull = w0.ids.vehicle_sensors, w0.ids.magnetometer, w0.ids.hull_body
+    layout = w0.ids.vehicle_sensors, w0.ids.magnetometer, w0.ids.hull_body
+    for w in worlds:
+        ids = w.ids
+        if (ids.vehicle_sensors, ids.magnetometer, ids.hull_body) != layout:
+            raise ValueError("the worlds' vehicle sensors are not at the same addresses: "
+                             "read each world's vehicle_motion() instead")
+    (g, a, v, e, p), mag, hull = layout
     n = len(worlds)
     sensed = np.empty((n, w0.model.nsensordata))
     rotation = np.empty((n, 9))

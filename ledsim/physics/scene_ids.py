@@ -96,7 +96,9 @@ THRUSTERS = ("thruster_surge", "thruster_sway", "thruster_heave", "thruster_pitc
 
 
 class VehicleMotion(NamedTuple):
-    """The noise-free values of the vehicle's sensors at one instant (SI units).
+    """The noise-free values of the vehicle's sensors at one instant (SI units); of N
+    worlds at once (:func:`~ledsim.physics.hull.vehicle_motion_rows`), each field has a
+    leading axis of N (``encoder`` (N,)).
 
     Attributes:
         gyro: hull angular velocity in the IMU frame [rad/s], (3,).
