@@ -78,9 +78,15 @@ class HullAccess:
         ``ctrlrange``, read once), as lists."""
         return self._thruster_cache()[:3]
 
+    def thruster_bounds(self) -> tuple:
+        """(where the thrusters sit in ``data.ctrl``: a slice when their ids are
+        consecutive, else the ids; their lower and upper limits [N, N m] as arrays),
+        read once from the model's ``ctrlrange``."""
+        return self._thruster_cache()[3:6]
+
     def _thruster_cache(self) -> tuple:
-        """:meth:`_thruster_range`, then the ids as a slice where they are consecutive
-        (else the list) and the limits as arrays: what :func:`set_thrust_rows` takes."""
+        """:meth:`_thruster_range`, then :meth:`thruster_bounds`, then the model they
+        were read from."""
         cached = getattr(self, "_thrusters_cached", None)
         if cached is None or cached[-1] is not self.model:
             ids = np.array(self.ids.thrusters)
@@ -169,13 +175,13 @@ def set_thrust_rows(worlds, command: np.ndarray) -> np.ndarray:
     (N, 5)."""
     if len(worlds) == 1:  # plain floats beat numpy's calls for one
         return worlds[0].set_thrust(command[0])[None]
-    cached = [w._thruster_cache() for w in worlds]
-    lo = np.array([c[4] for c in cached])
-    hi = np.array([c[5] for c in cached])
+    bounds = [w.thruster_bounds() for w in worlds]
+    lo = np.array([b[1] for b in bounds])
+    hi = np.array([b[2] for b in bounds])
     x = np.asarray(command, dtype=float)
     applied = np.where(x < lo, lo, np.where(x > hi, hi, x))
-    for w, c, row in zip(worlds, cached, applied, strict=True):
-        w.data.ctrl[c[3]] = row
+    for w, b, row in zip(worlds, bounds, applied, strict=True):
+        w.data.ctrl[b[0]] = row
     return applied
 
 
