@@ -14,7 +14,11 @@ the loop around it (warm caches, one thread):
   the float64 arithmetic of these networks, which any loop running this observer does;
 * **the vehicle**: the stacked vehicles' step (``Vehicle.act_rows``), per vehicle;
 * **the sensor**: every world's read in one pass (``SensorRows``, as the loop reads
-  them), and each world's ray-cast read alone, per world.
+  them), and each world's ray-cast read alone, per world;
+* **the loop less its control steps**: what a control step that cost nothing would leave
+  (a second run's time less its control steps' own, timed inside it), beside one
+  world's bare physics (``bench_batch.floor_us``, the one-seed figure's floor, on a twin
+  of world 0 just before and after that run).
 
 The physics and the maps (the cheaper of the two ways) bound the steps per second of
 any loop that runs this observer on this physics, however little Python it spends
@@ -22,6 +26,7 @@ around them; with the vehicle and the sensor as they are implemented, the last l
 bounds a loop of these parts.
 
     python scripts/bench_floor.py [--seeds 64] [--out docs/bench_floor.md] [--json PATH]
+    python scripts/bench_floor.py --seeds 1 --seconds 5 --out docs/bench_floor_one.md
 """
 
 from __future__ import annotations
@@ -112,7 +117,7 @@ def maps_stacked(estimators) -> float:
 
 
 def measure(n: int, seconds: float) -> dict:
-    from bench_batch import batch_against_rollout
+    from bench_batch import batch_against_rollout, floor_us
 
     from ledsim.loop.closed_loop import ClosedLoop
     from ledsim.loop.run_config import RunConfig
@@ -121,7 +126,15 @@ def measure(n: int, seconds: float) -> dict:
     loop_sps, rollout_sps = batch_against_rollout(n, seconds)
     cfg = RunConfig(scenario="align", estimator="kkl", supervision=True, seconds=seconds)
     loop = ClosedLoop(cfg, range(n))
+    # One world's bare physics, on a twin of world 0, just before and just after the
+    # timed run: this machine's speed drifts within minutes.
+    twin = ClosedLoop(cfg, [0]).runs[0].world
+    burst = min(seconds, 1.0)
+    before = floor_us(twin, burst)
+    t0 = time.perf_counter()
     loop.run()
+    run_us = 1e6 * (time.perf_counter() - t0) / (n * loop.steps)
+    world_floor_us = 0.5 * (before + floor_us(twin, burst))
     estimators = [r.step.estimator for r in loop.runs]
     out = {"seeds": n, "seconds": seconds, "loop_sps": loop_sps, "rollout_sps": rollout_sps,
            "loop_us": 1e6 / loop_sps,
@@ -143,6 +156,10 @@ def measure(n: int, seconds: float) -> dict:
     out["maps_us"] = min(out["maps_one_by_one_us"], out["maps_stacked_us"])
     out["estimator_floor_us"] = out["physics_us"] + out["maps_us"]
     out["floor_us"] = out["estimator_floor_us"] + out["vehicle_us"] + out["sensor_us"]
+    # Both from the same run: the machine's speed drifts between runs.
+    out["loop_run_us"] = run_us
+    out["loop_less_control_us"] = run_us - out["control_us"]
+    out["world_floor_us"] = world_floor_us
     out["estimator_floor_sps"] = 1e6 / out["estimator_floor_us"]
     out["floor_sps"] = 1e6 / out["floor_us"]
     return out
@@ -151,9 +168,15 @@ def measure(n: int, seconds: float) -> dict:
 def table(r: dict) -> str:
     n = r["seeds"]
     rows = [("the loop, measured", r["loop_us"], r["loop_sps"]),
+            ("the loop again, timing its control steps", r["loop_run_us"],
+             1e6 / r["loop_run_us"]),
             ("its control steps alone (gate to motor)", r["control_us"], None),
+            ("the loop less its control steps", r["loop_less_control_us"],
+             1e6 / r["loop_less_control_us"]),
             ("physics: `mujoco.rollout` of the same worlds", r["physics_us"],
              r["rollout_sps"]),
+            ("physics of one world alone: `mj_step` over Te and the sensor's rays "
+             "(`bench_batch.py`'s one-seed floor)", r["world_floor_us"], None),
             ("the KKL's maps, seed by seed", r["maps_one_by_one_us"], None),
             ("the KKL's maps, stacked over the seeds", r["maps_stacked_us"], None),
             ("the vehicle, stacked", r["vehicle_us"], None),
@@ -164,9 +187,12 @@ def table(r: dict) -> str:
              r["estimator_floor_sps"]),
             ("**with the vehicle and the sensor** as they are", r["floor_us"],
              r["floor_sps"])]
-    lines = [f"# What a seed-step costs at least ({n} seeds together, one thread)", "",
-             "`python scripts/bench_floor.py` (the module's docstring says how each part "
-             "is timed). Microseconds per seed and step; steps per second where a "
+    flags = "".join(f" --{k} {r[k]:g}" for k, default in (("seeds", 64), ("seconds", 1.0))
+                    if r[k] != default)
+    who = "one seed" if n == 1 else f"{n} seeds together"
+    lines = [f"# What a seed-step costs at least ({who}, one thread)", "",
+             f"`python scripts/bench_floor.py{flags}` (the module's docstring says how "
+             "each part is timed). Microseconds per seed and step; steps per second where a "
              "figure is a rate.", "", "| part | us per seed-step | steps / s |",
              "|---|---|---|"]
     lines += [f"| {label} | {us:.1f} | {'' if sps is None else format(sps, '.3g')} |"
@@ -176,8 +202,13 @@ def table(r: dict) -> str:
               f"reach {r['estimator_floor_sps'] / rate:.2f}, with the vehicle and the "
               f"sensor {r['floor_sps'] / rate:.2f}; the loop reaches "
               f"{r['loop_sps'] / rate:.2f}, {r['loop_sps'] / r['floor_sps']:.2f} of the "
-              "second floor. The stacked maps' largest difference from the seed-by-seed "
-              f"call: {r['maps_stacked_max_difference']:.1e}."]
+              "second floor. A control step that cost nothing would leave the loop at "
+              f"{1e6 / r['loop_less_control_us'] / rate:.2f} of `mujoco.rollout`"
+              + (f" and at {r['world_floor_us'] / r['loop_less_control_us']:.2f} of its "
+                 f"physics floor (the loop reaches {r['world_floor_us'] / r['loop_run_us']:.2f})"
+                 if n == 1 else "")
+              + ". The stacked maps' largest difference from the seed-by-seed call: "
+              f"{r['maps_stacked_max_difference']:.1e}."]
     return "\n".join(lines) + "\n"
 
 

@@ -54,6 +54,8 @@ def test_measure_reports_every_part():
         assert r[key] > 0, key
     assert r["maps_stacked_max_difference"] <= 1e-12  # numpy stacked, compiled one by one
     assert r["floor_us"] > r["estimator_floor_us"] > r["physics_us"]
+    assert r["world_floor_us"] > 0
+    assert r["loop_less_control_us"] == r["loop_run_us"] - r["control_us"] > 0
     assert "| **physics and the maps**" in bench_floor.table(r)
 
 
