@@ -123,6 +123,9 @@ def measure(n: int, seconds: float) -> dict:
     from ledsim.loop.run_config import RunConfig
     from ledsim.physics.sensor_rows import SensorRows
 
+    # One short run first: numba loads its compiled kernels from the cache on a
+    # process's first step, which is not a step's cost.
+    batch_against_rollout(n, min(seconds, 0.05))
     loop_sps, rollout_sps = batch_against_rollout(n, seconds)
     cfg = RunConfig(scenario="align", estimator="kkl", supervision=True, seconds=seconds)
     loop = ClosedLoop(cfg, range(n))
