@@ -67,15 +67,22 @@ def frame_error_rate(ber) -> np.ndarray:
     """FER [-] of the code at each bit error rate ``ber`` [-]: P[Binomial(n, p) > t],
     summed exactly in logs (the tail itself where it is small, so that a clean link's
     FER is not the round-off of 1 - (1 - FER))."""
-    p = np.clip(np.asarray(ber, dtype=float), 0.0, 0.5)
+    shape = np.shape(ber)
+    p = np.clip(np.atleast_1d(np.asarray(ber, dtype=float)), 0.0, 0.5)
     out = np.zeros(p.shape)
     small = (p > 0) & (p * CODE_N < CODE_T)  # the tail beyond t + 800 is nothing there
     large = p * CODE_N >= CODE_T
     if small.any():
+        # Below t the terms fall with k, so the first is the largest; where its log is
+        # under -800 the sum is 0.0 in float64 (exp underflows at -745): not summed.
+        ps = p[small]
+        first = _CHOOSE_ABOVE[0] + _ABOVE[0] * np.log(ps) + (CODE_N - _ABOVE[0]) * np.log1p(-ps)
+        small[small] = first >= -800.0
+    if small.any():
         out[small] = _sum_exp(_log_terms(_ABOVE, _CHOOSE_ABOVE, p[small][..., None]))
     if large.any():
         out[large] = 1.0 - _sum_exp(_log_terms(_BELOW, _CHOOSE_BELOW, p[large][..., None]))
-    return np.clip(out, 0.0, 1.0)
+    return np.clip(out.reshape(shape), 0.0, 1.0)
 
 
 def delivered_bits(power, noise: MeasurementNoise, Te: float, bit_rate: float
