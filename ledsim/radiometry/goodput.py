@@ -75,10 +75,8 @@ def frame_error_rate(ber) -> np.ndarray:
     if small.any():
         # Below t the terms fall with k, so the first is the largest; where its log is
         # under -800 the sum is 0.0 in float64 (exp underflows at -745): not summed.
-        ps = p[small]
-        first = _CHOOSE_ABOVE[0] + _ABOVE[0] * np.log(ps) + (CODE_N - _ABOVE[0]) * np.log1p(-ps)
+        first = _log_terms(_ABOVE[:1], _CHOOSE_ABOVE[:1], p[small][..., None])[..., 0]
         small[small] = first >= -800.0
-    if small.any():
         out[small] = _sum_exp(_log_terms(_ABOVE, _CHOOSE_ABOVE, p[small][..., None]))
     if large.any():
         out[large] = 1.0 - _sum_exp(_log_terms(_BELOW, _CHOOSE_BELOW, p[large][..., None]))
